@@ -1,0 +1,53 @@
+#pragma once
+// Shared plumbing of the paco_* tools: error reporting with a non-zero exit, timing, and output
+// files that appear only when complete (never a partial file after an error or Ctrl-C).
+#include <chrono>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace paco::app {
+
+/// Runs a tool's body; turns paco::Error and std::exception into "<tool>: error: <message>" on
+/// stderr and exit code 1 (2 for usage errors). Also removes the pending outputs on failure.
+int runTool(const std::string& tool_name, const std::function<int()>& body);
+
+/// Thrown for a bad command line; runTool prints it with a hint to use --help, exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// An output path that is written to "<path>.partial" first and renamed into place by commit().
+/// Pending outputs that are never committed are deleted by runTool on failure and on destruction.
+class PendingOutput {
+ public:
+  explicit PendingOutput(std::string final_path);
+  ~PendingOutput();
+  PendingOutput(const PendingOutput&) = delete;
+  PendingOutput& operator=(const PendingOutput&) = delete;
+  /// The path to write to now. It keeps the final extension (writers pick the format by it).
+  const std::string& writePath() const { return temp_path_; }
+  const std::string& finalPath() const { return final_path_; }
+  void commit();
+
+ private:
+  std::string final_path_, temp_path_;
+  bool committed_ = false;
+};
+
+/// Measures and prints per-stage wall times: "  segment      0.031 s".
+class StageTimer {
+ public:
+  void start(const std::string& stage);
+  void stop();
+  double seconds(const std::string& stage) const;
+  void print() const;
+
+ private:
+  std::vector<std::pair<std::string, double>> stages_;
+  std::string current_;
+  std::chrono::steady_clock::time_point started_;
+};
+
+}  // namespace paco::app

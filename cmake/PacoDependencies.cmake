@@ -1,0 +1,35 @@
+# Finds every third-party dependency of paco. Used by the build and, installed, by
+# pacoConfig.cmake so that a consumer's find_package(paco) finds the same dependencies.
+include(CMakeFindDependencyMacro)
+list(APPEND CMAKE_MODULE_PATH "${CMAKE_CURRENT_LIST_DIR}")
+
+if(NOT DEFINED PACO_WITH_CGAL)
+  set(PACO_WITH_CGAL ON)
+endif()
+if(NOT DEFINED PACO_WITH_TORCH)
+  set(PACO_WITH_TORCH ON)
+endif()
+
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(Threads REQUIRED)
+find_package(OpenMP REQUIRED COMPONENTS CXX)
+# Only the PCL components we use: each further one drags in more of VTK and Qt.
+find_package(PCL 1.12 REQUIRED COMPONENTS common io kdtree search features segmentation
+             sample_consensus filters)
+# PCL's own FindFLANN provides FLANN::FLANN (FLANN ships no CMake config).
+if(NOT TARGET FLANN::FLANN)
+  find_package(FLANN REQUIRED)
+endif()
+find_package(Boost 1.71 REQUIRED COMPONENTS program_options)
+
+if(PACO_WITH_CGAL)
+  # CGAL 5 is header-only; GMP/MPFR come with its exact kernels.
+  set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
+  find_package(CGAL 5.4 REQUIRED)
+  find_package(CBC REQUIRED)
+  find_package(GLPK REQUIRED)
+endif()
+
+if(PACO_WITH_TORCH)
+  find_package(Torch REQUIRED)
+endif()

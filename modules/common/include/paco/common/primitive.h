@@ -1,0 +1,52 @@
+#pragma once
+// Usage:
+//   paco::PlanarSegmentation seg;                     // filled by paco::PlanarSegmenter
+//   auto primitives = paco::makePrimitives(*cloud, seg);  // one PlanarPrimitive per segment
+//   for (const auto& p : primitives) std::cout << p.plane.normal.transpose() << " " << p.points.size();
+#include <paco/common/plane.h>
+
+#include <pcl/PointIndices.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace paco {
+
+/// A planar primitive: a plane, the inlier points on it (with normals) and a confidence.
+struct PlanarPrimitive {
+  Plane plane;
+  pcl::PointCloud<pcl::PointNormal> points;  ///< inliers, in the same frame as the plane
+  float confidence = 1.0f;                    ///< in [0, 1]; 1 for segments of an observed cloud
+};
+
+/// The result of planar segmentation of a cloud of N points.
+struct PlanarSegmentation {
+  std::vector<int> labels;                      ///< N entries: segment index, or -1 for none
+  std::vector<Plane> planes;                    ///< one plane per segment
+  std::vector<pcl::PointIndices> segments;      ///< the point indices of each segment
+
+  std::size_t size() const { return planes.size(); }
+  bool empty() const { return planes.empty(); }
+  /// Fraction of the N points that belong to a segment (0 for an empty cloud).
+  double coverage() const;
+  /// Rebuilds `segments` from `labels` (labels must be -1 or < planes.size()).
+  void rebuildSegmentsFromLabels();
+  /// Rebuilds `labels` for `num_points` points from `segments`.
+  void rebuildLabelsFromSegments(std::size_t num_points);
+  /// Throws InvalidInputError when labels, planes and segments disagree.
+  void validate(std::size_t num_points) const;
+};
+
+/// One primitive per segment: its plane and its points. Points without normals get the plane's.
+std::vector<PlanarPrimitive> makePrimitives(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                            const PlanarSegmentation& segmentation);
+std::vector<PlanarPrimitive> makePrimitives(const pcl::PointCloud<pcl::PointXYZ>& cloud,
+                                            const PlanarSegmentation& segmentation);
+
+/// All inliers of all primitives as one cloud, with a label per point (the primitive index).
+void flattenPrimitives(const std::vector<PlanarPrimitive>& primitives,
+                       pcl::PointCloud<pcl::PointNormal>& cloud, std::vector<int>& labels);
+
+}  // namespace paco

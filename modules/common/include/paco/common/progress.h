@@ -1,0 +1,57 @@
+#pragma once
+// Usage:
+//   paco::InterruptGuard guard;                 // Ctrl-C sets a flag instead of killing
+//   paco::ProgressBar bar("segment", total);
+//   for (...) { if (paco::interruptRequested()) break; work(); bar.advance(); }
+//   bar.finish();
+#include <chrono>
+#include <cstddef>
+#include <cstdio>
+#include <mutex>
+#include <string>
+
+namespace paco {
+
+/// A one-line terminal progress bar with count, rate and ETA. Thread-safe; redraws at most
+/// ~10 times a second. On a non-terminal stream it prints a line every 10 % instead.
+class ProgressBar {
+ public:
+  ProgressBar(std::string label, std::size_t total, std::FILE* stream = stderr);
+  ~ProgressBar();
+  void advance(std::size_t steps = 1);
+  /// A short free-form status shown after the counters, e.g. "loss 0.31".
+  void setStatus(const std::string& status);
+  void finish();
+
+  /// "1.2 s", "3 min 04 s", "2 h 05 min".
+  static std::string formatDuration(double seconds);
+
+ private:
+  void draw(bool final);
+  std::string label_;
+  std::size_t total_;
+  std::size_t done_ = 0;
+  std::FILE* stream_;
+  bool is_terminal_;
+  bool finished_ = false;
+  int last_decile_ = -1;
+  std::string status_;
+  std::chrono::steady_clock::time_point start_, last_draw_;
+  std::mutex mutex_;
+};
+
+/// While alive, SIGINT and SIGTERM set a flag (interruptRequested()) instead of ending the
+/// process, so long work can save its state and stop cleanly. A second Ctrl-C ends the process.
+class InterruptGuard {
+ public:
+  InterruptGuard();
+  ~InterruptGuard();
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+};
+
+bool interruptRequested();
+/// For tests and for code that stops work itself.
+void setInterruptRequested(bool requested);
+
+}  // namespace paco

@@ -1,0 +1,105 @@
+#include <paco/common/error.h>
+#include <paco/common/primitive.h>
+
+#include <cmath>
+#include <string>
+#include <type_traits>
+
+namespace paco {
+
+double PlanarSegmentation::coverage() const {
+  if (labels.empty()) return 0.0;
+  std::size_t assigned = 0;
+  for (int l : labels) assigned += (l >= 0);
+  return static_cast<double>(assigned) / static_cast<double>(labels.size());
+}
+
+void PlanarSegmentation::rebuildSegmentsFromLabels() {
+  segments.assign(planes.size(), pcl::PointIndices());
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const int l = labels[i];
+    if (l < 0) continue;
+    if (static_cast<std::size_t>(l) >= planes.size())
+      throw InvalidInputError("PlanarSegmentation: label " + std::to_string(l) + " of point " +
+                              std::to_string(i) + " has no plane (" + std::to_string(planes.size()) +
+                              " planes)");
+    segments[l].indices.push_back(static_cast<int>(i));
+  }
+}
+
+void PlanarSegmentation::rebuildLabelsFromSegments(std::size_t num_points) {
+  labels.assign(num_points, -1);
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    for (int i : segments[s].indices) {
+      if (i < 0 || static_cast<std::size_t>(i) >= num_points)
+        throw InvalidInputError("PlanarSegmentation: segment " + std::to_string(s) +
+                                " has point index " + std::to_string(i) + " outside the cloud of " +
+                                std::to_string(num_points) + " points");
+      labels[i] = static_cast<int>(s);
+    }
+}
+
+void PlanarSegmentation::validate(std::size_t num_points) const {
+  if (labels.size() != num_points)
+    throw InvalidInputError("PlanarSegmentation: " + std::to_string(labels.size()) +
+                            " labels for a cloud of " + std::to_string(num_points) + " points");
+  if (segments.size() != planes.size())
+    throw InvalidInputError("PlanarSegmentation: " + std::to_string(segments.size()) +
+                            " segments but " + std::to_string(planes.size()) + " planes");
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    for (int i : segments[s].indices)
+      if (i < 0 || static_cast<std::size_t>(i) >= num_points || labels[i] != static_cast<int>(s))
+        throw InvalidInputError("PlanarSegmentation: segment " + std::to_string(s) +
+                                " and the labels disagree at point " + std::to_string(i));
+}
+
+namespace {
+template <typename PointT>
+std::vector<PlanarPrimitive> makePrimitivesImpl(const pcl::PointCloud<PointT>& cloud,
+                                                const PlanarSegmentation& seg) {
+  seg.validate(cloud.size());
+  std::vector<PlanarPrimitive> primitives(seg.planes.size());
+  for (std::size_t s = 0; s < seg.planes.size(); ++s) {
+    PlanarPrimitive& prim = primitives[s];
+    prim.plane = seg.planes[s];
+    prim.points.reserve(seg.segments[s].indices.size());
+    for (int i : seg.segments[s].indices) {
+      const PointT& src = cloud[i];
+      pcl::PointNormal p;
+      p.x = src.x; p.y = src.y; p.z = src.z;
+      Eigen::Vector3f n = prim.plane.normal.cast<float>();
+      if constexpr (std::is_same_v<PointT, pcl::PointNormal>) {
+        // Keep the point's own normal only when it is usable; else the plane's.
+        Eigen::Vector3f own(src.normal_x, src.normal_y, src.normal_z);
+        if (own.allFinite() && own.squaredNorm() > 0.25f) n = own.normalized();
+      }
+      p.normal_x = n.x(); p.normal_y = n.y(); p.normal_z = n.z();
+      p.curvature = 0.0f;
+      prim.points.push_back(p);
+    }
+  }
+  return primitives;
+}
+}  // namespace
+
+std::vector<PlanarPrimitive> makePrimitives(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                            const PlanarSegmentation& seg) {
+  return makePrimitivesImpl(cloud, seg);
+}
+std::vector<PlanarPrimitive> makePrimitives(const pcl::PointCloud<pcl::PointXYZ>& cloud,
+                                            const PlanarSegmentation& seg) {
+  return makePrimitivesImpl(cloud, seg);
+}
+
+void flattenPrimitives(const std::vector<PlanarPrimitive>& primitives,
+                       pcl::PointCloud<pcl::PointNormal>& cloud, std::vector<int>& labels) {
+  cloud.clear();
+  labels.clear();
+  for (std::size_t s = 0; s < primitives.size(); ++s)
+    for (const auto& p : primitives[s].points) {
+      cloud.push_back(p);
+      labels.push_back(static_cast<int>(s));
+    }
+}
+
+}  // namespace paco

@@ -1,0 +1,281 @@
+#include <paco/common/error.h>
+#include <paco/common/surface_mesh.h>
+
+#include <pcl/conversions.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <unordered_map>
+
+namespace paco {
+
+namespace {
+// Union-find over dense indices, used for connected components and vertex fans.
+struct DisjointSets {
+  std::vector<std::size_t> parent;
+  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::size_t find(std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
+};
+
+// Uniform double in [0, 1) from 53 random bits: identical on every standard library, unlike
+// std::uniform_real_distribution, so a seed gives the same samples everywhere.
+double unitUniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+}  // namespace
+
+std::size_t SurfaceMesh::numTriangles() const {
+  std::size_t n = 0;
+  for (const auto& f : faces) n += f.size() >= 3 ? f.size() - 2 : 0;
+  return n;
+}
+
+void SurfaceMesh::validate(const std::string& what) const {
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    if (!vertices[v].allFinite())
+      throw InvalidInputError(what + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    if (faces[f].size() < 3)
+      throw InvalidInputError(what + ": face " + std::to_string(f) + " has " +
+                              std::to_string(faces[f].size()) + " vertices; a face needs at least 3");
+    for (auto i : faces[f])
+      if (i >= vertices.size())
+        throw InvalidInputError(what + ": face " + std::to_string(f) + " uses vertex " +
+                                std::to_string(i) + " but the mesh has " +
+                                std::to_string(vertices.size()) + " vertices");
+  }
+}
+
+std::string MeshTopology::describe() const {
+  std::string s = isClosed() ? "closed" : "open (" + std::to_string(boundary_edges) + " boundary edges)";
+  s += isManifold() ? ", manifold" : ", non-manifold (" + std::to_string(non_manifold_edges) +
+                                         " edges, " + std::to_string(non_manifold_vertices) + " vertices)";
+  s += isOriented() ? ", oriented" : ", inconsistently oriented (" + std::to_string(inconsistent_edges) + " edges)";
+  s += ", " + std::to_string(components) + (components == 1 ? " component" : " components");
+  return s;
+}
+
+MeshTopology analyseTopology(const SurfaceMesh& mesh) {
+  mesh.validate();
+  MeshTopology t;
+  struct EdgeUse { std::size_t face; bool forward; };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<EdgeUse>> edges;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& face = mesh.faces[f];
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const std::uint32_t a = face[k], b = face[(k + 1) % face.size()];
+      if (a == b) continue;
+      edges[{std::min(a, b), std::max(a, b)}].push_back({f, a < b});
+    }
+  }
+  DisjointSets face_sets(mesh.faces.size());
+  for (const auto& [key, uses] : edges) {
+    if (uses.size() == 1) ++t.boundary_edges;
+    else if (uses.size() > 2) ++t.non_manifold_edges;
+    else if (uses[0].forward == uses[1].forward) ++t.inconsistent_edges;
+    for (std::size_t k = 1; k < uses.size(); ++k) face_sets.unite(uses[0].face, uses[k].face);
+  }
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) t.components += face_sets.find(f) == f;
+
+  // A vertex is manifold when its faces form one fan: connected through edges at the vertex.
+  std::vector<std::vector<std::size_t>> vertex_faces(mesh.vertices.size());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    for (auto v : mesh.faces[f]) vertex_faces[v].push_back(f);
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const auto& fs = vertex_faces[v];
+    if (fs.size() < 2) continue;
+    std::map<std::uint32_t, std::vector<std::size_t>> by_neighbour;  // other end of an edge at v
+    for (std::size_t k = 0; k < fs.size(); ++k) {
+      const auto& face = mesh.faces[fs[k]];
+      for (std::size_t j = 0; j < face.size(); ++j)
+        if (face[j] == v) {
+          by_neighbour[face[(j + 1) % face.size()]].push_back(k);
+          by_neighbour[face[(j + face.size() - 1) % face.size()]].push_back(k);
+        }
+    }
+    DisjointSets fan(fs.size());
+    for (const auto& [w, ks] : by_neighbour)
+      for (std::size_t k = 1; k < ks.size(); ++k) fan.unite(ks[0], ks[k]);
+    std::size_t fans = 0;
+    for (std::size_t k = 0; k < fs.size(); ++k) fans += fan.find(k) == k;
+    if (fans > 1) ++t.non_manifold_vertices;
+  }
+  return t;
+}
+
+std::size_t weldVertices(SurfaceMesh& mesh, double tolerance) {
+  if (mesh.vertices.empty()) return 0;
+  const double cell = std::max(tolerance, 1e-300);
+  auto key_of = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
+    const auto q = [&](double c, int d) { return static_cast<std::int64_t>(std::floor(c / cell)) + d; };
+    const std::int64_t x = q(p.x(), dx), y = q(p.y(), dy), z = q(p.z(), dz);
+    return static_cast<std::uint64_t>(x * 73856093) ^ static_cast<std::uint64_t>(y * 19349663) ^
+           static_cast<std::uint64_t>(z * 83492791);
+  };
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
+  std::vector<std::uint32_t> remap(mesh.vertices.size());
+  std::vector<Eigen::Vector3d> kept;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Eigen::Vector3d& p = mesh.vertices[v];
+    std::int64_t found = -1;
+    for (int dx = -1; dx <= 1 && found < 0; ++dx)
+      for (int dy = -1; dy <= 1 && found < 0; ++dy)
+        for (int dz = -1; dz <= 1 && found < 0; ++dz) {
+          auto it = grid.find(key_of(p, dx, dy, dz));
+          if (it == grid.end()) continue;
+          for (auto k : it->second)
+            if ((kept[k] - p).norm() <= tolerance) { found = k; break; }
+        }
+    if (found < 0) {
+      found = static_cast<std::int64_t>(kept.size());
+      kept.push_back(p);
+      grid[key_of(p, 0, 0, 0)].push_back(static_cast<std::uint32_t>(found));
+    }
+    remap[v] = static_cast<std::uint32_t>(found);
+  }
+  const std::size_t removed = mesh.vertices.size() - kept.size();
+  mesh.vertices = std::move(kept);
+  std::vector<std::vector<std::uint32_t>> faces;
+  faces.reserve(mesh.faces.size());
+  for (const auto& face : mesh.faces) {
+    std::vector<std::uint32_t> f;
+    for (auto i : face) {
+      const auto j = remap[i];
+      if (f.empty() || f.back() != j) f.push_back(j);
+    }
+    while (f.size() > 1 && f.front() == f.back()) f.pop_back();
+    if (f.size() >= 3) faces.push_back(std::move(f));
+  }
+  mesh.faces = std::move(faces);
+  return removed;
+}
+
+Eigen::Vector3d faceNormal(const SurfaceMesh& mesh, std::size_t face) {
+  const auto& f = mesh.faces[face];
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < f.size(); ++k)
+    n += mesh.vertices[f[k]].cross(mesh.vertices[f[(k + 1) % f.size()]]);
+  const double len = n.norm();
+  return len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+}
+
+double surfaceArea(const SurfaceMesh& mesh) {
+  double area = 0;
+  for (const auto& f : mesh.faces)
+    for (std::size_t k = 1; k + 1 < f.size(); ++k)
+      area += 0.5 * (mesh.vertices[f[k]] - mesh.vertices[f[0]])
+                        .cross(mesh.vertices[f[k + 1]] - mesh.vertices[f[0]]).norm();
+  return area;
+}
+
+double signedVolume(const SurfaceMesh& mesh) {
+  double six_v = 0;
+  for (const auto& f : mesh.faces)
+    for (std::size_t k = 1; k + 1 < f.size(); ++k)
+      six_v += mesh.vertices[f[0]].dot(mesh.vertices[f[k]].cross(mesh.vertices[f[k + 1]]));
+  return six_v / 6.0;
+}
+
+void boundingBox(const SurfaceMesh& mesh, Eigen::Vector3d& min, Eigen::Vector3d& max) {
+  min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  max = -min;
+  for (const auto& v : mesh.vertices) {
+    min = min.cwiseMin(v);
+    max = max.cwiseMax(v);
+  }
+}
+
+void flipFaces(SurfaceMesh& mesh) {
+  for (auto& f : mesh.faces) std::reverse(f.begin(), f.end());
+}
+
+SurfaceMesh triangulated(const SurfaceMesh& mesh) {
+  SurfaceMesh out;
+  out.vertices = mesh.vertices;
+  out.faces.reserve(mesh.numTriangles());
+  for (const auto& f : mesh.faces)
+    for (std::size_t k = 1; k + 1 < f.size(); ++k) out.faces.push_back({f[0], f[k], f[k + 1]});
+  return out;
+}
+
+SurfaceSample sampleSurface(const SurfaceMesh& mesh, std::size_t count, std::uint64_t seed) {
+  mesh.validate();
+  struct Triangle { std::uint32_t face, a, b, c; };
+  std::vector<Triangle> triangles;
+  std::vector<double> cumulative;
+  double total = 0;
+  for (std::size_t fi = 0; fi < mesh.faces.size(); ++fi) {
+    const auto& f = mesh.faces[fi];
+    for (std::size_t k = 1; k + 1 < f.size(); ++k) {
+      const double a = 0.5 * (mesh.vertices[f[k]] - mesh.vertices[f[0]])
+                                 .cross(mesh.vertices[f[k + 1]] - mesh.vertices[f[0]]).norm();
+      if (!(a > 0)) continue;
+      total += a;
+      triangles.push_back({static_cast<std::uint32_t>(fi), f[0], f[k], f[k + 1]});
+      cumulative.push_back(total);
+    }
+  }
+  if (!(total > 0)) throw InvalidInputError("sampleSurface: the mesh has no area to sample");
+  std::vector<Eigen::Vector3d> face_normals(mesh.faces.size());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) face_normals[f] = faceNormal(mesh, f);
+
+  SurfaceSample s;
+  s.points.reserve(count); s.normals.reserve(count); s.faces.reserve(count);
+  std::mt19937_64 rng(seed);
+  for (std::size_t i = 0; i < count; ++i) {
+    const double r = unitUniform(rng) * total;
+    std::size_t t = std::upper_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin();
+    t = std::min(t, triangles.size() - 1);
+    double u = unitUniform(rng), v = unitUniform(rng);
+    if (u + v > 1) { u = 1 - u; v = 1 - v; }
+    const Triangle& tri = triangles[t];
+    const Eigen::Vector3d& A = mesh.vertices[tri.a];
+    s.points.push_back(A + u * (mesh.vertices[tri.b] - A) + v * (mesh.vertices[tri.c] - A));
+    s.normals.push_back(face_normals[tri.face]);
+    s.faces.push_back(tri.face);
+  }
+  return s;
+}
+
+pcl::PolygonMesh toPolygonMesh(const SurfaceMesh& mesh) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.reserve(mesh.vertices.size());
+  for (const auto& v : mesh.vertices)
+    cloud.push_back(pcl::PointXYZ(static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())));
+  pcl::PolygonMesh out;
+  pcl::toPCLPointCloud2(cloud, out.cloud);
+  out.polygons.reserve(mesh.faces.size());
+  for (const auto& f : mesh.faces) {
+    pcl::Vertices poly;
+    poly.vertices.assign(f.begin(), f.end());
+    out.polygons.push_back(std::move(poly));
+  }
+  return out;
+}
+
+SurfaceMesh fromPolygonMesh(const pcl::PolygonMesh& mesh) {
+  bool has_x = false, has_y = false, has_z = false;
+  for (const auto& field : mesh.cloud.fields) {
+    has_x |= field.name == "x"; has_y |= field.name == "y"; has_z |= field.name == "z";
+  }
+  if (!(has_x && has_y && has_z) && !mesh.polygons.empty())
+    throw InvalidInputError("fromPolygonMesh: the mesh cloud has no x, y, z fields");
+  SurfaceMesh out;
+  if (has_x && has_y && has_z) {
+    pcl::PointCloud<pcl::PointXYZ> cloud;
+    pcl::fromPCLPointCloud2(mesh.cloud, cloud);
+    out.vertices.reserve(cloud.size());
+    for (const auto& p : cloud) out.vertices.emplace_back(p.x, p.y, p.z);
+  }
+  out.faces.reserve(mesh.polygons.size());
+  for (const auto& poly : mesh.polygons) out.faces.emplace_back(poly.vertices.begin(), poly.vertices.end());
+  return out;
+}
+
+}  // namespace paco

@@ -1,0 +1,55 @@
+#pragma once
+// Usage:
+//   paco::io::LabelledCloud scan = paco::io::loadCloud("scan.ply");      // format by extension
+//   if (!scan.has_normals) ... estimate them ...
+//   paco::io::saveCloud("labelled.pcd", scan);                           // PCD with a label field
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <string>
+#include <vector>
+
+namespace paco::io {
+
+/// A point cloud as read from a file: positions, optional normals, optional per-point labels.
+struct LabelledCloud {
+  pcl::PointCloud<pcl::PointNormal> points;  ///< normals are 0 when has_normals is false
+  bool has_normals = false;
+  std::vector<int> labels;                   ///< one per point (-1 = none), or empty for no labels
+  bool hasLabels() const { return !labels.empty(); }
+};
+
+/// What to do with points whose coordinates are NaN or Inf.
+enum class NonFinitePolicy {
+  Reject,  ///< throw IoError naming the file and the first bad point (default)
+  Drop,    ///< drop them and print one warning to stderr with the count
+};
+
+struct CloudReadOptions {
+  NonFinitePolicy non_finite = NonFinitePolicy::Reject;
+};
+
+enum class PcdEncoding { Ascii, Binary, BinaryCompressed };
+
+struct CloudWriteOptions {
+  PcdEncoding pcd_encoding = PcdEncoding::Binary;  ///< for .pcd only
+  bool ascii_ply = false;                          ///< for .ply: ascii instead of binary
+};
+
+/// Reads a cloud, choosing the reader by extension (case-insensitive):
+///   .pcd  PCL PCD (ascii, binary, binary_compressed); fields x y z [normal_x normal_y normal_z] [label]
+///   .ply  PLY vertices (ascii or binary); properties x y z [nx ny nz] [label|plane_id|segment_index]
+///   .xyz  text, one point a line: "x y z" or "x y z nx ny nz" ('#' starts a comment)
+///   .npy  the authors' (N,7) float32/float64 array: x y z nx ny nz plane_id (N,3 and N,6 too)
+///   .vg/.bvg  PolyFit vertex groups (points, normals, group labels)
+/// Throws paco::IoError for a missing, empty, truncated or malformed file, naming file and problem.
+LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options = {});
+
+/// Writes a cloud by extension (.pcd, .ply, .xyz, .npy). Labels are written when present
+/// (PCD field "label", PLY property "label", .npy column 7). Throws paco::IoError on failure.
+void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudWriteOptions& options = {});
+
+/// Lower-case extension with the dot (".pcd"), or "" when there is none.
+std::string extensionOf(const std::string& path);
+
+}  // namespace paco::io

@@ -1,0 +1,42 @@
+#pragma once
+// PolyFit / Easy3D "vertex group" files: a point cloud plus planar groups of point indices, each
+// with its plane. This is how paco's primitives reach PolyFit, Easy3D and abspy, and come back.
+// Usage:
+//   auto vg = paco::io::toVertexGroups(primitives);
+//   paco::io::saveVertexGroups("planes.vg", vg);            // .vg ascii, .bvg binary
+//   auto back = paco::io::toPrimitives(paco::io::loadVertexGroups("planes.bvg"));
+#include <paco/common/primitive.h>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <string>
+#include <vector>
+
+namespace paco::io {
+
+struct VertexGroups {
+  pcl::PointCloud<pcl::PointNormal> points;
+  bool has_normals = false;
+  /// Planes and the point indices of each group; labels mark points of no group with -1.
+  PlanarSegmentation segmentation;
+  /// Per group: its label text (PolyFit writes "unknown") and colour (r, g, b in [0, 1]).
+  std::vector<std::string> group_labels;
+  std::vector<Eigen::Vector3f> group_colors;
+  /// Per group: the confidence of a completed primitive (1 for observed segments). Stored in the
+  /// group label as "confidence=<value>" so that other readers still open the file.
+  std::vector<float> confidences;
+};
+
+/// Reads .vg (ascii) or .bvg (binary) by extension. Throws paco::IoError for a missing, empty,
+/// truncated or malformed file (bad counts, indices out of range, non-finite values).
+VertexGroups loadVertexGroups(const std::string& path);
+/// Writes .vg (ascii) or .bvg (binary) by extension, in the layout PolyFit and Easy3D read.
+void saveVertexGroups(const std::string& path, const VertexGroups& groups);
+
+/// One group per primitive; the points of all primitives are concatenated.
+VertexGroups toVertexGroups(const std::vector<PlanarPrimitive>& primitives);
+/// One primitive per group, with the group's plane (the stored one, or a fit if it is missing).
+std::vector<PlanarPrimitive> toPrimitives(const VertexGroups& groups);
+
+}  // namespace paco::io

@@ -1,0 +1,51 @@
+#include <paco/common/error.h>
+#include <paco/common/primitive.h>
+
+#include <gtest/gtest.h>
+
+namespace {
+paco::PlanarSegmentation twoPlaneSegmentation() {
+  paco::PlanarSegmentation seg;
+  seg.planes = {paco::Plane(Eigen::Vector3d(0, 0, 1), 0), paco::Plane(Eigen::Vector3d(1, 0, 0), -1)};
+  seg.labels = {0, 0, 1, -1, 1};
+  seg.rebuildSegmentsFromLabels();
+  return seg;
+}
+}  // namespace
+
+TEST(PlanarSegmentation, SegmentsAndLabelsAgree) {
+  auto seg = twoPlaneSegmentation();
+  ASSERT_EQ(seg.segments.size(), 2u);
+  EXPECT_EQ(seg.segments[0].indices, (std::vector<int>{0, 1}));
+  EXPECT_EQ(seg.segments[1].indices, (std::vector<int>{2, 4}));
+  EXPECT_DOUBLE_EQ(seg.coverage(), 0.8);
+  EXPECT_NO_THROW(seg.validate(5));
+  EXPECT_THROW(seg.validate(6), paco::InvalidInputError);
+  auto copy = seg;
+  copy.rebuildLabelsFromSegments(5);
+  EXPECT_EQ(copy.labels, seg.labels);
+}
+
+TEST(PlanarSegmentation, LabelWithoutPlaneIsRejected) {
+  paco::PlanarSegmentation seg;
+  seg.planes = {paco::Plane()};
+  seg.labels = {0, 3};
+  EXPECT_THROW(seg.rebuildSegmentsFromLabels(), paco::InvalidInputError);
+}
+
+TEST(PlanarPrimitive, MakePrimitivesCopiesPointsAndUsesPlaneNormalWhenMissing) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int i = 0; i < 5; ++i) cloud.push_back(pcl::PointXYZ(i, 0, 0));
+  auto prims = paco::makePrimitives(cloud, twoPlaneSegmentation());
+  ASSERT_EQ(prims.size(), 2u);
+  ASSERT_EQ(prims[1].points.size(), 2u);
+  EXPECT_FLOAT_EQ(prims[1].points[1].x, 4.0f);
+  EXPECT_FLOAT_EQ(prims[1].points[0].normal_x, 1.0f);
+  EXPECT_FLOAT_EQ(prims[0].confidence, 1.0f);
+
+  pcl::PointCloud<pcl::PointNormal> flat;
+  std::vector<int> labels;
+  paco::flattenPrimitives(prims, flat, labels);
+  EXPECT_EQ(flat.size(), 4u);
+  EXPECT_EQ(labels, (std::vector<int>{0, 0, 1, 1}));
+}

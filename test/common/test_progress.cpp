@@ -1,0 +1,44 @@
+#include <paco/common/progress.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <string>
+
+TEST(ProgressBar, FormatsDurations) {
+  EXPECT_EQ(paco::ProgressBar::formatDuration(1.25), "1.2 s");
+  EXPECT_EQ(paco::ProgressBar::formatDuration(184), "3 min 04 s");
+  EXPECT_EQ(paco::ProgressBar::formatDuration(7500), "2 h 05 min");
+  EXPECT_EQ(paco::ProgressBar::formatDuration(NAN), "?");
+}
+
+TEST(ProgressBar, WritesCountRateAndFinalLineToNonTerminal) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    paco::ProgressBar bar("work", 4, f);
+    bar.setStatus("loss 0.5");
+    for (int i = 0; i < 4; ++i) bar.advance();
+  }
+  std::rewind(f);
+  char buf[4096] = {0};
+  const std::size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+  std::fclose(f);
+  const std::string text(buf, n);
+  EXPECT_NE(text.find("work ["), std::string::npos);
+  EXPECT_NE(text.find("4/4 100%"), std::string::npos);
+  EXPECT_NE(text.find("/s in "), std::string::npos);
+  EXPECT_NE(text.find("loss 0.5"), std::string::npos);
+}
+
+TEST(InterruptGuard, SigintSetsFlagInsteadOfKilling) {
+  paco::setInterruptRequested(false);
+  {
+    paco::InterruptGuard guard;
+    std::raise(SIGINT);
+    EXPECT_TRUE(paco::interruptRequested());
+  }
+  paco::setInterruptRequested(false);
+}

@@ -1,0 +1,137 @@
+#include <paco/common/error.h>
+#include <paco/common/surface_mesh.h>
+
+#include <gtest/gtest.h>
+
+namespace {
+// Axis-aligned box [0,a]x[0,b]x[0,c] with outward quads.
+paco::SurfaceMesh box(double a, double b, double c) {
+  paco::SurfaceMesh m;
+  m.vertices = {{0, 0, 0}, {a, 0, 0}, {a, b, 0}, {0, b, 0}, {0, 0, c}, {a, 0, c}, {a, b, c}, {0, b, c}};
+  m.faces = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 4, 7, 3}, {1, 2, 6, 5}};
+  return m;
+}
+}  // namespace
+
+TEST(SurfaceMesh, BoxIsClosedManifoldOrientedWithKnownAreaAndVolume) {
+  const auto m = box(1, 2, 3);
+  const auto t = paco::analyseTopology(m);
+  EXPECT_TRUE(t.isClosedManifold()) << t.describe();
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_NEAR(paco::surfaceArea(m), 2 * (2 + 3 + 6), 1e-12);
+  EXPECT_NEAR(paco::signedVolume(m), 6.0, 1e-12);
+  EXPECT_TRUE(paco::faceNormal(m, 1).isApprox(Eigen::Vector3d(0, 0, 1)));
+  EXPECT_EQ(m.numTriangles(), 12u);
+  EXPECT_NEAR(paco::signedVolume(paco::triangulated(m)), 6.0, 1e-12);
+}
+
+TEST(SurfaceMesh, DetectsHolesFlipsAndNonManifoldEdges) {
+  auto open = box(1, 1, 1);
+  open.faces.pop_back();
+  auto t = paco::analyseTopology(open);
+  EXPECT_FALSE(t.isClosed());
+  EXPECT_EQ(t.boundary_edges, 4u);
+
+  auto flipped = box(1, 1, 1);
+  std::reverse(flipped.faces[0].begin(), flipped.faces[0].end());
+  t = paco::analyseTopology(flipped);
+  EXPECT_TRUE(t.isClosed());
+  EXPECT_FALSE(t.isOriented());
+  EXPECT_EQ(t.inconsistent_edges, 4u);
+
+  auto inverted = box(1, 1, 1);
+  paco::flipFaces(inverted);
+  EXPECT_NEAR(paco::signedVolume(inverted), -1.0, 1e-12);
+
+  auto fin = box(1, 1, 1);
+  fin.vertices.push_back({0.5, 0.5, 2});
+  fin.faces.push_back({4, 5, 8});  // a third face on edge 4-5
+  t = paco::analyseTopology(fin);
+  EXPECT_EQ(t.non_manifold_edges, 1u);
+  EXPECT_FALSE(t.isClosedManifold());
+}
+
+TEST(SurfaceMesh, TwoBoxesTouchingAtAVertexAreNonManifold) {
+  auto a = box(1, 1, 1);
+  auto b = box(1, 1, 1);
+  const auto offset = static_cast<std::uint32_t>(a.vertices.size());
+  for (auto v : b.vertices) a.vertices.push_back(v + Eigen::Vector3d(1, 1, 1));
+  for (auto f : b.faces) {
+    for (auto& i : f) i = (i == 0) ? 6 : i + offset;  // share corner (1,1,1)
+    a.faces.push_back(f);
+  }
+  const auto t = paco::analyseTopology(a);
+  EXPECT_TRUE(t.isClosed());
+  EXPECT_EQ(t.non_manifold_vertices, 1u);
+  EXPECT_FALSE(t.isManifold());
+}
+
+TEST(SurfaceMesh, WeldMergesDuplicatedCorners) {
+  // A "triangle soup" box: every quad has its own 4 vertices, as CGAL's raw output does.
+  const auto ref = box(1, 1, 1);
+  paco::SurfaceMesh soup;
+  for (const auto& f : ref.faces) {
+    std::vector<std::uint32_t> nf;
+    for (auto i : f) {
+      nf.push_back(static_cast<std::uint32_t>(soup.vertices.size()));
+      soup.vertices.push_back(ref.vertices[i] + Eigen::Vector3d::Constant(1e-9));
+    }
+    soup.faces.push_back(nf);
+  }
+  EXPECT_FALSE(paco::analyseTopology(soup).isClosed());
+  EXPECT_EQ(paco::weldVertices(soup, 1e-6), 16u);
+  EXPECT_EQ(soup.vertices.size(), 8u);
+  EXPECT_TRUE(paco::analyseTopology(soup).isClosedManifold());
+}
+
+TEST(SurfaceMesh, SamplingIsUniformByAreaAndDeterministic) {
+  const auto m = box(1, 1, 4);  // side faces 4x larger than top and bottom
+  const auto s1 = paco::sampleSurface(m, 20000, 7);
+  const auto s2 = paco::sampleSurface(m, 20000, 7);
+  ASSERT_EQ(s1.points.size(), 20000u);
+  EXPECT_EQ(s1.points, s2.points);
+  std::size_t top = 0;
+  for (std::size_t i = 0; i < s1.points.size(); ++i) {
+    EXPECT_NEAR(std::abs(s1.normals[i].norm()), 1.0, 1e-12);
+    top += s1.faces[i] == 1;
+    // Every sample lies on its own face plane.
+    const Eigen::Vector3d n = paco::faceNormal(m, s1.faces[i]);
+    EXPECT_NEAR(n.dot(s1.points[i] - m.vertices[m.faces[s1.faces[i]][0]]), 0, 1e-12);
+  }
+  EXPECT_NEAR(static_cast<double>(top) / 20000.0, 1.0 / 18.0, 0.01);  // area 1 of 18
+  EXPECT_NE(paco::sampleSurface(m, 10, 8).points, paco::sampleSurface(m, 10, 7).points);
+}
+
+TEST(SurfaceMesh, ValidateRejectsBadIndicesAndNaN) {
+  auto m = box(1, 1, 1);
+  m.faces.push_back({0, 1, 99});
+  EXPECT_THROW(m.validate("box"), paco::InvalidInputError);
+  auto n = box(1, 1, 1);
+  n.vertices[0].x() = NAN;
+  EXPECT_THROW(n.validate(), paco::InvalidInputError);
+  paco::SurfaceMesh empty;
+  EXPECT_THROW(paco::sampleSurface(empty, 10, 1), paco::InvalidInputError);
+}
+
+TEST(SurfaceMesh, PolygonMeshRoundTrip) {
+  const auto m = box(1, 2, 3);
+  const auto back = paco::fromPolygonMesh(paco::toPolygonMesh(m));
+  ASSERT_EQ(back.vertices.size(), 8u);
+  EXPECT_EQ(back.faces, m.faces);
+  EXPECT_TRUE(back.vertices[6].isApprox(Eigen::Vector3d(1, 2, 3)));
+}
+
+#include "shapes.h"
+
+TEST(TestShapes, AreClosedOrientedSolidsWithKnownVolumes) {
+  struct Case { const char* name; paco::SurfaceMesh mesh; double volume; };
+  const Case cases[] = {{"box", paco::test::makeBox({-1, 0, 0}, {1, 2, 3}), 12.0},
+                        {"L", paco::test::makeLBracket(1.0, 0.4, 0.6), 0.6 * (1 - 0.36)},
+                        {"chamfer", paco::test::makeChamferedCube(0.3), 1 - 0.045},
+                        {"boss", paco::test::makeBossOnSlab(), 5.0}};
+  for (const auto& c : cases) {
+    const auto t = paco::analyseTopology(c.mesh);
+    EXPECT_TRUE(t.isClosedManifold()) << c.name << ": " << t.describe();
+    EXPECT_NEAR(paco::signedVolume(c.mesh), c.volume, 1e-12) << c.name;
+  }
+}

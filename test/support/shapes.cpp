@@ -1,0 +1,60 @@
+#include "shapes.h"
+
+namespace paco::test {
+
+SurfaceMesh makePrism(const std::vector<Eigen::Vector2d>& polygon, double height) {
+  SurfaceMesh m;
+  const auto n = static_cast<std::uint32_t>(polygon.size());
+  for (const auto& p : polygon) m.vertices.emplace_back(p.x(), p.y(), 0.0);
+  for (const auto& p : polygon) m.vertices.emplace_back(p.x(), p.y(), height);
+  std::vector<std::uint32_t> bottom, top;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    bottom.push_back(n - 1 - i);  // reversed: faces -z
+    top.push_back(n + i);
+    const std::uint32_t j = (i + 1) % n;
+    m.faces.push_back({i, j, n + j, n + i});
+  }
+  m.faces.push_back(bottom);
+  m.faces.push_back(top);
+  return m;
+}
+
+SurfaceMesh makeBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
+  const Eigen::Vector3d size = max - min;
+  SurfaceMesh m = makePrism({{0, 0}, {size.x(), 0}, {size.x(), size.y()}, {0, size.y()}}, size.z());
+  for (auto& v : m.vertices) v += min;
+  return m;
+}
+
+SurfaceMesh makeLBracket(double a, double b, double h) {
+  return makePrism({{0, 0}, {a, 0}, {a, b}, {b, b}, {b, a}, {0, a}}, h);
+}
+
+SurfaceMesh makeChamferedCube(double c) {
+  // Profile in the xz-plane extruded along y: build it as a prism in xy, then swap axes.
+  SurfaceMesh m = makePrism({{0, 0}, {1, 0}, {1, 1 - c}, {1 - c, 1}, {0, 1}}, 1.0);
+  // (x, y, z) -> (x, z, y) mirrors; reverse faces to keep them outward.
+  for (auto& v : m.vertices) std::swap(v.y(), v.z());
+  flipFaces(m);
+  return m;
+}
+
+SurfaceMesh makeBossOnSlab() {
+  SurfaceMesh m;
+  // Slab corners 0-7, boss bottom ring 8-11 (on z = 1), boss top 12-15 (z = 2).
+  m.vertices = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}, {0, 0, 1}, {2, 0, 1}, {2, 2, 1}, {0, 2, 1},
+                {0.5, 0.5, 1}, {1.5, 0.5, 1}, {1.5, 1.5, 1}, {0.5, 1.5, 1},
+                {0.5, 0.5, 2}, {1.5, 0.5, 2}, {1.5, 1.5, 2}, {0.5, 1.5, 2}};
+  m.faces = {{0, 3, 2, 1}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7},
+             // slab top: the ring between the outer square 4-7 and the boss square 8-11
+             {4, 5, 9}, {4, 9, 8}, {5, 6, 10}, {5, 10, 9}, {6, 7, 11}, {6, 11, 10}, {7, 4, 8}, {7, 8, 11},
+             // boss sides and top
+             {8, 9, 13, 12}, {9, 10, 14, 13}, {10, 11, 15, 14}, {11, 8, 12, 15}, {12, 13, 14, 15}};
+  return m;
+}
+
+void transformMesh(SurfaceMesh& mesh, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
+  for (auto& v : mesh.vertices) v = rotation * v + translation;
+}
+
+}  // namespace paco::test

@@ -1,0 +1,27 @@
+#pragma once
+// Small closed, outward-oriented polyhedra with known planes, areas and volumes, for tests.
+// Richer CAD-like parts come from paco::data's procedural generator.
+#include <paco/common/surface_mesh.h>
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace paco::test {
+
+/// Axis-aligned box between `min` and `max`: 6 quad faces.
+SurfaceMesh makeBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max);
+/// Extrusion of a simple counter-clockwise polygon in the xy-plane from z = 0 to z = height:
+/// a bottom face, a top face and one quad per polygon edge.
+SurfaceMesh makePrism(const std::vector<Eigen::Vector2d>& polygon, double height);
+/// L-shaped extrusion: an a x a square with an (a-b) x (a-b) corner removed, height h. 8 planes,
+/// volume h * (a^2 - (a-b)^2).
+SurfaceMesh makeLBracket(double a = 1.0, double b = 0.4, double h = 0.6);
+/// Unit cube with the edge at x = 1, z = 1 chamfered by `c`: 7 planes, volume 1 - c^2 / 2.
+SurfaceMesh makeChamferedCube(double c = 0.3);
+/// Union of a 2 x 2 x 1 slab and a 1 x 1 x 1 boss centred on its top: 11 planes (the slab top
+/// is one ring face, triangulated), volume 5.
+SurfaceMesh makeBossOnSlab();
+/// Applies x -> R x + t to every vertex.
+void transformMesh(SurfaceMesh& mesh, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
+
+}  // namespace paco::test

@@ -1,0 +1,39 @@
+#pragma once
+// Helpers for paco's tests: a temporary folder removed at the end, and the shared data folder
+// (../shared next to the checkout) that tests may use only when present.
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace paco::test {
+
+/// A fresh empty folder under the system temp dir, removed with everything in it on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// Writes `bytes` to `path` verbatim (for malformed-file tests).
+void writeBytes(const std::string& path, const std::string& bytes);
+/// Reads a whole file.
+std::string readBytes(const std::string& path);
+
+/// The project's shared data folder (PACO_SHARED_DIR, else ../shared beside the source tree),
+/// or nothing when it is absent: tests that need it call GTEST_SKIP() then.
+std::optional<std::filesystem::path> sharedDataDir();
+
+/// Path of a built tool (e.g. "paco_segment") in the build tree.
+std::string toolPath(const std::string& name);
+
+/// Runs a shell command, returns its exit status, and captures stdout+stderr into `output`.
+int runCommand(const std::string& command, std::string* output = nullptr);
+
+}  // namespace paco::test
