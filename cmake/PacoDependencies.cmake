@@ -16,6 +16,12 @@ find_package(OpenMP REQUIRED COMPONENTS CXX)
 # Only the PCL components we use: each further one drags in more of VTK and Qt.
 find_package(PCL 1.12 REQUIRED COMPONENTS common io kdtree search features segmentation
              sample_consensus filters)
+# Debian's VTK (linked by pcl_features and pcl_io) lists MPI::MPI_C in VTK::mpi's interface, but
+# paco enables no C language, so FindMPI cannot create it: stand in an empty target (the VTK
+# shared libraries carry their own MPI dependency).
+if(TARGET VTK::mpi AND NOT TARGET MPI::MPI_C)
+  add_library(MPI::MPI_C INTERFACE IMPORTED)
+endif()
 # PCL's own FindFLANN provides FLANN::FLANN (FLANN ships no CMake config).
 if(NOT TARGET FLANN::FLANN)
   find_package(FLANN REQUIRED)

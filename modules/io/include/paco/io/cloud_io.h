@@ -6,6 +6,7 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,11 @@ struct LabelledCloud {
   pcl::PointCloud<pcl::PointNormal> points;  ///< normals are 0 when has_normals is false
   bool has_normals = false;
   std::vector<int> labels;                   ///< one per point (-1 = none), or empty for no labels
+  /// One packed 0xRRGGBB colour per point, or empty. Written to PCD only (field "rgb", as PCL's
+  /// PointXYZRGB); readers leave it empty.
+  std::vector<std::uint32_t> colours;
   bool hasLabels() const { return !labels.empty(); }
+  bool hasColours() const { return !colours.empty(); }
 };
 
 /// What to do with points whose coordinates are NaN or Inf.
@@ -45,8 +50,11 @@ struct CloudWriteOptions {
 /// Throws paco::IoError for a missing, empty, truncated or malformed file, naming file and problem.
 LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options = {});
 
-/// Writes a cloud by extension (.pcd, .ply, .xyz, .npy). Labels are written when present
-/// (PCD field "label", PLY property "label", .npy column 7). Throws paco::IoError on failure.
+/// Writes a cloud by extension (.pcd, .ply, .xyz, .npy, .vg, .bvg). Labels are written when present
+/// (PCD field "label", PLY property "label", .npy column 7 with zero normals when there are none;
+/// .vg/.bvg: one group per label with its fitted plane). Binary formats store float32; text
+/// formats use the shortest text that reads back to the same float (at most 9 digits). Throws paco::IoError on
+/// failure (unwritable path, unknown extension, labels.size() != points.size()).
 void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudWriteOptions& options = {});
 
 /// Lower-case extension with the dot (".pcd"), or "" when there is none.

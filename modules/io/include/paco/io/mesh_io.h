@@ -16,8 +16,10 @@ namespace paco::io {
 /// file, one without faces (unless allow_no_faces), or with non-finite vertices.
 SurfaceMesh loadMesh(const std::string& path, bool allow_no_faces = false);
 
-/// Writes a polygon mesh by extension: .obj, .off, .ply (binary little-endian), .stl (binary,
-/// faces fan-triangulated). Vertices are written with full double precision in text formats.
+/// Writes a polygon mesh by extension: .obj, .off, .ply (binary little-endian, double
+/// coordinates), .stl (binary float32, faces fan-triangulated). Text formats write the shortest
+/// text that reads back to the same double. Throws paco::IoError for an unwritable path, an
+/// unknown extension, or faces with fewer than 3 vertices or indices out of range.
 void saveMesh(const std::string& path, const SurfaceMesh& mesh);
 
 /// The same for pcl::PolygonMesh, through paco::SurfaceMesh.

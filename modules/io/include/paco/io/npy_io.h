@@ -15,8 +15,9 @@ struct NpyArray {
   double at(std::size_t r, std::size_t c) const { return data[r * cols + c]; }
 };
 
-/// Reads a 2-D float32/float64 (or 1-D) little-endian C-order .npy. Throws paco::IoError for a
-/// bad magic, unsupported dtype or order, or a file shorter than its header says.
+/// Reads a 2-D (or 1-D: one column) float32/float64 .npy, format v1, v2 or v3, either byte order,
+/// C or Fortran order. Throws paco::IoError for a bad magic, an unsupported dtype or shape, a
+/// malformed header dict, or a file shorter than its header says.
 NpyArray loadNpy(const std::string& path);
 /// Writes a 2-D array as float32 ("<f4") or float64 ("<f8").
 void saveNpy(const std::string& path, const NpyArray& array, bool float64 = false);

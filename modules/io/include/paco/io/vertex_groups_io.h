@@ -28,10 +28,17 @@ struct VertexGroups {
   std::vector<float> confidences;
 };
 
-/// Reads .vg (ascii) or .bvg (binary) by extension. Throws paco::IoError for a missing, empty,
-/// truncated or malformed file (bad counts, indices out of range, non-finite values).
+/// Reads .vg (ascii) or .bvg (binary) by extension. A group whose stored plane is missing or zero
+/// (Easy3D writes zeros) gets the plane fitted to its points; child groups are read and skipped;
+/// a point in two groups is labelled with the first. Throws paco::IoError for a missing, empty,
+/// truncated or malformed file (bad counts, indices out of range, non-finite values, non-plane
+/// groups).
 VertexGroups loadVertexGroups(const std::string& path);
-/// Writes .vg (ascii) or .bvg (binary) by extension, in the layout PolyFit and Easy3D read.
+/// Writes .vg (ascii) or .bvg (binary) by extension, in the layout PolyFit and Easy3D read. Each
+/// group's label is "confidence=<v>" when `confidences` is filled, else its group_labels entry
+/// (blanks become '_'), else "unknown"; colours default to a fixed palette. Point colours and
+/// child groups are not written. Throws paco::IoError for an unwritable path or groups that
+/// disagree with the points (index out of range, sizes that differ).
 void saveVertexGroups(const std::string& path, const VertexGroups& groups);
 
 /// One group per primitive; the points of all primitives are concatenated.

@@ -1,0 +1,136 @@
+#include "io_detail.h"
+
+#include <paco/common/error.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+// The binary readers and writers move little-endian values with memcpy.
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "paco::io assumes a little-endian host"
+#endif
+
+namespace paco::io::detail {
+
+void fail(const std::string& path, const std::string& problem) {
+  throw IoError("'" + path + "': " + problem);
+}
+
+std::string readWholeFile(const std::string& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) fail(path, "file not found");
+  if (std::filesystem::is_directory(status)) fail(path, "is a folder, not a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open for reading: ") + std::strerror(errno));
+  std::string bytes;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size > 0) {
+    bytes.resize(static_cast<std::size_t>(size));
+    in.seekg(0, std::ios::beg);
+    in.read(bytes.data(), size);
+    if (in.gcount() != size) fail(path, "read error: got " + std::to_string(in.gcount()) + " of " +
+                                            std::to_string(size) + " bytes");
+  }
+  if (bytes.empty()) fail(path, "file is empty (0 bytes)");
+  return bytes;
+}
+
+void writeWholeFile(const std::string& path, const std::string& bytes) {
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (!file) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
+  const std::size_t written = std::fwrite(bytes.data(), 1, bytes.size(), file);
+  const int write_errno = errno;
+  const bool closed = std::fclose(file) == 0;
+  if (written != bytes.size() || !closed) {
+    std::error_code ec;
+    std::filesystem::remove(path, ec);  // no partial file
+    fail(path, std::string("write failed: ") + std::strerror(closed ? write_errno : errno));
+  }
+}
+
+// std::to_chars gives the shortest text that reads back to the same value (never more digits
+// than %.9g / %.17g), locale-independent and several times faster than snprintf.
+void appendFloat(std::string& out, float value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+void appendDouble(std::string& out, double value) {
+  char buffer[40];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+bool parseDouble(std::string_view token, double& value) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  return ec == std::errc() && end == token.data() + token.size();
+}
+
+bool parseInt64(std::string_view token, std::int64_t& value) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  return ec == std::errc() && end == token.data() + token.size();
+}
+
+namespace {
+bool isBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+}  // namespace
+
+void splitTokens(std::string_view line, std::vector<std::string_view>& tokens) {
+  tokens.clear();
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && isBlank(line[i])) ++i;
+    const std::size_t start = i;
+    while (i < line.size() && !isBlank(line[i])) ++i;
+    if (i > start) tokens.push_back(line.substr(start, i - start));
+  }
+}
+
+bool TextCursor::nextToken(std::string_view& token) {
+  while (pos_ < text_.size() && (isBlank(text_[pos_]) || text_[pos_] == '\n')) {
+    if (text_[pos_] == '\n') ++line_;
+    ++pos_;
+  }
+  if (pos_ >= text_.size()) return false;
+  const std::size_t start = pos_;
+  while (pos_ < text_.size() && !isBlank(text_[pos_]) && text_[pos_] != '\n') ++pos_;
+  token = text_.substr(start, pos_ - start);
+  return true;
+}
+
+bool TextCursor::nextLine(std::string_view& line) {
+  if (pos_ >= text_.size()) return false;
+  std::size_t end = text_.find('\n', pos_);
+  const bool has_newline = end != std::string_view::npos;
+  if (!has_newline) end = text_.size();
+  std::size_t stop = end;
+  if (stop > pos_ && text_[stop - 1] == '\r') --stop;
+  line = text_.substr(pos_, stop - pos_);
+  pos_ = has_newline ? end + 1 : end;
+  if (has_newline) ++line_;
+  return true;
+}
+
+std::string plural(std::size_t n, const std::string& noun) {
+  if (n == 1) return "1 " + noun;
+  if (noun == "vertex") return std::to_string(n) + " vertices";
+  return std::to_string(n) + " " + noun + "s";
+}
+
+std::string numberText(double value) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof(buffer), "%.9g", value);
+  return buffer;
+}
+
+}  // namespace paco::io::detail
