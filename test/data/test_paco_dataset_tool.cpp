@@ -1,0 +1,81 @@
+#include <paco/data/dataset.h>
+#include <paco/io/cloud_io.h>
+#include <paco/io/mesh_io.h>
+
+#include "shapes.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace {
+
+#ifdef PACO_HAVE_DATASET_TOOL
+
+const char kSmall[] = " --views 2 --levels 0,2 --input-points 256 --gt-points 512 --dense-points 2048";
+
+TEST(PacoDatasetTool, ProceduralRunIsResumable) {
+  paco::test::TempDir dir;
+  const std::string out = dir.file("ds");
+  const std::string command = paco::test::toolPath("paco_dataset") + " --procedural 3 " + out + kSmall + " --jobs 2";
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(command, &log), 0) << log;
+  EXPECT_NE(log.find("nearest"), std::string::npos) << log;
+  EXPECT_NE(log.find("built 3 parts"), std::string::npos) << log;
+  const std::string index = paco::test::readBytes(out + "/index.tsv");
+  // Rerun: nothing left to build, index unchanged.
+  ASSERT_EQ(paco::test::runCommand(command, &log), 0) << log;
+  EXPECT_NE(log.find("0 to build"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::readBytes(out + "/index.tsv"), index);
+  // More parts later: only the new ones are built.
+  ASSERT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --procedural 4 " + out + kSmall, &log), 0);
+  EXPECT_NE(log.find("built 1 parts"), std::string::npos) << log;
+  const paco::data::Dataset dataset(out);
+  EXPECT_EQ(dataset.parts().size(), 4u);
+  // Other options into the same folder are refused.
+  EXPECT_NE(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --procedural 4 " + out + " --noise 3", &log), 0);
+
+  // --verify reads every sample back.
+  ASSERT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --verify " + out, &log), 0) << log;
+  EXPECT_NE(log.find("read 16 samples"), std::string::npos) << log;
+
+  // --export writes a PCD with normals and the GT mesh.
+  const std::string pcd = dir.file("sample.pcd"), off = dir.file("sample_gt.off");
+  ASSERT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --export " + out + " " + pcd +
+                                       " --export-mesh " + off + " --level 2 --view 1", &log), 0) << log;
+  const paco::io::LabelledCloud cloud = paco::io::loadCloud(pcd);
+  EXPECT_EQ(cloud.points.size(), 256u);
+  EXPECT_TRUE(cloud.has_normals);
+  EXPECT_TRUE(paco::analyseTopology(paco::io::loadMesh(off)).isClosedManifold());
+}
+
+TEST(PacoDatasetTool, BadMeshesAreListedNotFatal) {
+  paco::test::TempDir dir;
+  std::filesystem::create_directories(dir.file("meshes"));
+  paco::io::saveMesh(dir.file("meshes/good.obj"), paco::test::makeLBracket());
+  paco::SurfaceMesh open = paco::test::makeBox({0, 0, 0}, {1, 1, 1});
+  open.faces.pop_back();
+  paco::io::saveMesh(dir.file("meshes/open.off"), open);
+  paco::test::writeBytes(dir.file("meshes/garbage.stl"), "not a mesh");
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " " + dir.file("meshes") + " " +
+                                       dir.file("ds") + kSmall + " --mode visibility", &log), 0) << log;
+  EXPECT_NE(log.find("visibility"), std::string::npos);
+  const std::string failures = paco::test::readBytes(dir.file("ds/failures.tsv"));
+  EXPECT_NE(failures.find("open\tmesh is not closed"), std::string::npos) << failures;
+  EXPECT_NE(failures.find("garbage\tcannot read"), std::string::npos) << failures;
+  const paco::data::Dataset dataset(dir.file("ds"));
+  ASSERT_EQ(dataset.parts().size(), 1u);
+  EXPECT_EQ(dataset.parts()[0].num_planes, 8);
+  EXPECT_EQ(dataset.info().mode, "visibility");
+  // Usage errors exit with 2.
+  EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " " + dir.file("ds"), &log), 2);
+  EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --help", &log), 0);
+}
+
+#else
+TEST(PacoDatasetTool, NotBuilt) { GTEST_SKIP() << "paco_dataset is not part of this build"; }
+#endif
+
+}  // namespace
