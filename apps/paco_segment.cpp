@@ -1,0 +1,204 @@
+// paco_segment: stage 1 on its own. Groups a point cloud into planar segments and writes a
+// labelled PCD (field "label", -1 for no plane) and, optionally, PolyFit/Easy3D vertex groups.
+//   paco_segment scan.ply -o labelled.pcd --vg planes.vg
+//   paco_segment scan.xyz -o labelled.pcd --backend ransac --epsilon 0.01
+#include "app_support.h"
+
+#include <paco/common/error.h>
+#include <paco/io/cloud_io.h>
+#include <paco/io/vertex_groups_io.h>
+#include <paco/segmentation/segmentation.h>
+
+#include <boost/program_options.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <string>
+
+namespace po = boost::program_options;
+
+namespace {
+
+const char kTool[] = "paco_segment";
+
+// File-scope defaults, shown by --help.
+struct Options {
+  std::string input, output, vg;
+  std::string backend = "gocopp";
+  double epsilon = 0.004;
+  double normal_threshold = 0.85;
+  int min_points = 50;
+  int neighbours = 20;
+  unsigned int threads = 0;
+  bool ignore_normals = false;
+  // gocopp
+  double lambda_simplicity = 1.0;
+  double lambda_completeness = 1.0;
+  int max_rounds = 7;
+  // region-growing
+  double curvature = 0.05;
+  // ransac
+  int max_iterations = 1000;
+  // efficient-ransac
+  double probability = 0.01;
+  double cluster_epsilon = 0.0;
+};
+
+void printHelp(const po::options_description& visible) {
+  std::string backends;
+  for (const auto& name : paco::availablePlanarSegmenters()) backends += (backends.empty() ? "" : ", ") + name;
+  std::cout << "Usage: " << kTool << " INPUT -o LABELLED.pcd [--vg PLANES.vg] [--backend NAME] [options]\n\n"
+            << "Groups a point cloud (.pcd .ply .xyz .npy .vg .bvg) into planar segments. Writes the cloud\n"
+            << "with a per-point \"label\" field (-1: no plane) and, with --vg, the planes and their point\n"
+            << "groups for PolyFit / Easy3D (.vg ascii, .bvg binary). Distances are fractions of the\n"
+            << "bounding-box diagonal, so the same settings work in any unit. Points with NaN/Inf\n"
+            << "coordinates are dropped with a warning; missing normals are estimated.\n\n"
+            << "Backends: " << backends << " (default gocopp).\n\n"
+            << visible << std::endl;
+}
+
+template <typename Segmenter>
+Segmenter* as(const paco::PlanarSegmenter<pcl::PointNormal>::Ptr& segmenter) {
+  return dynamic_cast<Segmenter*>(segmenter.get());
+}
+
+paco::PlanarSegmenter<pcl::PointNormal>::Ptr makeSegmenter(const Options& o) {
+  auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>(o.backend);
+  segmenter->setDistanceThreshold(o.epsilon);
+  segmenter->setNormalThreshold(o.normal_threshold);
+  segmenter->setMinPointsPerPlane(o.min_points);
+  segmenter->setNumberOfNeighbours(o.neighbours);
+  segmenter->setNumberOfThreads(o.threads);
+  if (auto* g = as<paco::GoCoPPSegmenter<pcl::PointNormal>>(segmenter)) {
+    g->setLambdaSimplicity(o.lambda_simplicity);
+    g->setLambdaCompleteness(o.lambda_completeness);
+    g->setMaxRounds(o.max_rounds);
+  } else if (auto* r = as<paco::RegionGrowingSegmenter<pcl::PointNormal>>(segmenter)) {
+    r->setCurvatureThreshold(o.curvature);
+  } else if (auto* s = as<paco::RansacSegmenter<pcl::PointNormal>>(segmenter)) {
+    s->setMaxIterations(o.max_iterations);
+  } else if (auto* e = as<paco::EfficientRansacSegmenter<pcl::PointNormal>>(segmenter)) {
+    e->setProbability(o.probability);
+    e->setClusterEpsilon(o.cluster_epsilon);
+  }
+  return segmenter;
+}
+
+int run(int argc, char** argv) {
+  Options o;
+  po::options_description general("Options");
+  general.add_options()
+      ("help,h", "print this help")
+      ("output,o", po::value(&o.output), "labelled point cloud to write (.pcd; .ply .xyz .npy also work)")
+      ("vg", po::value(&o.vg), "also write the planes and groups as vertex groups (.vg or .bvg)")
+      ("backend,b", po::value(&o.backend)->default_value(o.backend), "gocopp, region-growing, ransac or efficient-ransac")
+      ("epsilon,e", po::value(&o.epsilon)->default_value(o.epsilon, "0.004"), "inlier distance to a plane, fraction of the bounding-box diagonal")
+      ("normal-threshold", po::value(&o.normal_threshold)->default_value(o.normal_threshold, "0.85"), "min |cos| between a point normal and its plane normal")
+      ("min-points", po::value(&o.min_points)->default_value(o.min_points), "fewest points of a plane")
+      ("neighbours,k", po::value(&o.neighbours)->default_value(o.neighbours), "neighbours for normal estimation and region growing")
+      ("threads", po::value(&o.threads)->default_value(o.threads), "threads for normal estimation (0: all cores)")
+      ("ignore-normals", po::bool_switch(&o.ignore_normals), "estimate normals even when the file has them");
+  po::options_description gocopp("gocopp options");
+  gocopp.add_options()
+      ("lambda-simplicity", po::value(&o.lambda_simplicity)->default_value(o.lambda_simplicity, "1"), "weight of the number of planes, [0, 3)")
+      ("lambda-completeness", po::value(&o.lambda_completeness)->default_value(o.lambda_completeness, "1"), "weight of the unassigned points, [0, 3)")
+      ("max-rounds", po::value(&o.max_rounds)->default_value(o.max_rounds), "rounds of merge/split/insert/exclude/transfer at most");
+  po::options_description growing("region-growing options");
+  growing.add_options()
+      ("curvature", po::value(&o.curvature)->default_value(o.curvature, "0.05"), "max curvature of a seed point, [0, 1/3]");
+  po::options_description ransac("ransac options");
+  ransac.add_options()
+      ("max-iterations", po::value(&o.max_iterations)->default_value(o.max_iterations), "RANSAC iterations per plane");
+  po::options_description efficient("efficient-ransac options");
+  efficient.add_options()
+      ("probability", po::value(&o.probability)->default_value(o.probability, "0.01"), "probability to miss the largest plane, (0, 1)")
+      ("cluster-epsilon", po::value(&o.cluster_epsilon)->default_value(o.cluster_epsilon, "0"), "max gap inside a plane, fraction of the diagonal (0: 3 x mean spacing)");
+  po::options_description visible;
+  visible.add(general).add(gocopp).add(growing).add(ransac).add(efficient);
+  po::options_description all;
+  all.add(visible).add_options()("input", po::value(&o.input));
+  po::positional_options_description positional;
+  positional.add("input", 1);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  if (vm.count("help")) {
+    printHelp(visible);
+    return 0;
+  }
+  if (o.input.empty()) throw paco::app::UsageError("expected an INPUT point cloud");
+  if (o.output.empty()) throw paco::app::UsageError("expected -o LABELLED.pcd");
+  if (!o.vg.empty()) {
+    const std::string ext = paco::io::extensionOf(o.vg);
+    if (ext != ".vg" && ext != ".bvg") throw paco::app::UsageError("--vg must name a .vg or .bvg file, got '" + o.vg + "'");
+  }
+  // Check every parameter before reading a large file.
+  paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
+  try {
+    segmenter = makeSegmenter(o);
+  } catch (const paco::InvalidInputError& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  paco::app::PendingOutput labelled_output(o.output);
+  std::unique_ptr<paco::app::PendingOutput> vg_output;
+  if (!o.vg.empty()) vg_output = std::make_unique<paco::app::PendingOutput>(o.vg);
+
+  paco::app::StageTimer timer;
+  timer.start("load");
+  paco::io::CloudReadOptions read;
+  read.non_finite = paco::io::NonFinitePolicy::Drop;
+  paco::io::LabelledCloud cloud = paco::io::loadCloud(o.input, read);
+  timer.stop();
+  std::printf("read '%s': %zu points%s\n", o.input.c_str(), cloud.points.size(),
+              cloud.has_normals && !o.ignore_normals ? ", with normals" : "");
+  if (!cloud.has_normals || o.ignore_normals) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (auto& p : cloud.points) p.normal_x = p.normal_y = p.normal_z = nan;
+  }
+
+  timer.start("segment");
+  pcl::PointCloud<pcl::PointNormal>::Ptr points(new pcl::PointCloud<pcl::PointNormal>(cloud.points));
+  segmenter->setInputCloud(points);
+  paco::PlanarSegmentation result;
+  segmenter->segment(result);
+  timer.stop();
+  std::printf("%s: %zu planes, coverage %.1f %%, %.3f s\n", segmenter->name().c_str(), result.size(),
+              100.0 * result.coverage(), timer.seconds("segment"));
+
+  // Write the normals used (given or estimated) along with the labels.
+  const auto& prepared = segmenter->prepared();
+  for (std::size_t i = 0; i < prepared.size(); ++i) {
+    auto& p = cloud.points[static_cast<std::size_t>(prepared.source_indices[i])];
+    p.getNormalVector3fMap() = (*prepared.points)[i].getNormalVector3fMap();
+  }
+  cloud.has_normals = true;
+  cloud.labels = result.labels;
+
+  timer.start("save");
+  paco::io::saveCloud(labelled_output.writePath(), cloud);
+  if (vg_output) {
+    paco::io::VertexGroups groups;
+    groups.points = cloud.points;
+    groups.has_normals = true;
+    groups.segmentation = result;
+    paco::io::saveVertexGroups(vg_output->writePath(), groups);
+  }
+  labelled_output.commit();
+  if (vg_output) vg_output->commit();
+  timer.stop();
+  std::printf("wrote '%s'%s%s\n", o.output.c_str(), o.vg.empty() ? "" : " and ", o.vg.c_str());
+  timer.print();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return paco::app::runTool(kTool, [&] { return run(argc, argv); });
+}

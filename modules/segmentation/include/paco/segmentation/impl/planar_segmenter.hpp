@@ -1,0 +1,121 @@
+#pragma once
+// Template definitions of PlanarSegmenter. Only needed for point types other than pcl::PointXYZ
+// and pcl::PointNormal, which libpaco_segmentation instantiates already.
+#include <paco/common/error.h>
+#include <paco/segmentation/planar_segmenter.h>
+
+#include <pcl/common/point_tests.h>
+#include <pcl/type_traits.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace paco {
+
+template <typename PointT>
+void PlanarSegmenter<PointT>::setDistanceThreshold(double fraction_of_diagonal) {
+  if (!(fraction_of_diagonal > 0.0 && fraction_of_diagonal < 1.0))
+    throw InvalidInputError("PlanarSegmenter::setDistanceThreshold: the distance threshold is a "
+                            "fraction of the bounding-box diagonal in (0, 1); got " +
+                            std::to_string(fraction_of_diagonal));
+  distance_threshold_ = fraction_of_diagonal;
+}
+
+template <typename PointT>
+void PlanarSegmenter<PointT>::setNormalThreshold(double min_abs_cosine) {
+  if (!(min_abs_cosine >= 0.0 && min_abs_cosine <= 1.0))
+    throw InvalidInputError("PlanarSegmenter::setNormalThreshold: the normal threshold is a |cosine| "
+                            "in [0, 1]; got " + std::to_string(min_abs_cosine));
+  normal_threshold_ = min_abs_cosine;
+}
+
+template <typename PointT>
+void PlanarSegmenter<PointT>::setMinPointsPerPlane(int min_points) {
+  if (min_points < 3)
+    throw InvalidInputError("PlanarSegmenter::setMinPointsPerPlane: a plane needs at least 3 points; got " +
+                            std::to_string(min_points));
+  min_points_ = min_points;
+}
+
+template <typename PointT>
+void PlanarSegmenter<PointT>::setNumberOfNeighbours(int k) {
+  if (k < 3)
+    throw InvalidInputError("PlanarSegmenter::setNumberOfNeighbours: k must be at least 3; got " +
+                            std::to_string(k));
+  neighbours_ = k;
+}
+
+template <typename PointT>
+void PlanarSegmenter<PointT>::gatherInput(pcl::PointCloud<pcl::PointNormal>& gathered,
+                                          std::vector<int>& source_indices) const {
+  const auto& cloud = *input_;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  gathered.clear();
+  gathered.reserve(indices_->size());
+  source_indices.clear();
+  source_indices.reserve(indices_->size());
+  for (const auto index : *indices_) {
+    if (index < 0 || static_cast<std::size_t>(index) >= cloud.size())
+      throw InvalidInputError("PlanarSegmenter: index " + std::to_string(index) +
+                              " is outside the input cloud of " + std::to_string(cloud.size()) +
+                              " points; check setIndices()");
+    const PointT& p = cloud[static_cast<std::size_t>(index)];
+    pcl::PointNormal q;
+    q.x = p.x;
+    q.y = p.y;
+    q.z = p.z;
+    q.normal_x = q.normal_y = q.normal_z = nan;
+    q.curvature = 0.0f;
+    if (input_normals_) {
+      const pcl::Normal& n = (*input_normals_)[static_cast<std::size_t>(index)];
+      q.normal_x = n.normal_x;
+      q.normal_y = n.normal_y;
+      q.normal_z = n.normal_z;
+      q.curvature = std::isfinite(n.curvature) ? n.curvature : 0.0f;
+    } else if constexpr (pcl::traits::has_normal_v<PointT>) {
+      q.normal_x = p.normal_x;
+      q.normal_y = p.normal_y;
+      q.normal_z = p.normal_z;
+    }
+    gathered.push_back(q);
+    source_indices.push_back(static_cast<int>(index));
+  }
+}
+
+template <typename PointT>
+void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
+  output = PlanarSegmentation{};
+  if (!input_)
+    throw InvalidInputError("PlanarSegmenter(" + name() +
+                            "): no input cloud; call setInputCloud() before segment()");
+  if (!initCompute())
+    throw InvalidInputError("PlanarSegmenter(" + name() + "): the input could not be prepared");
+  try {
+    if (input_normals_ && input_normals_->size() != input_->size())
+      throw InvalidInputError("PlanarSegmenter(" + name() + "): setInputNormals() gave " +
+                              std::to_string(input_normals_->size()) + " normals for " +
+                              std::to_string(input_->size()) + " points; give one per point");
+    pcl::PointCloud<pcl::PointNormal> gathered;
+    std::vector<int> source_indices;
+    gatherInput(gathered, source_indices);
+    detail::PrepareOptions options;
+    options.normal_neighbours = neighbours_;
+    options.threads = threads_;
+    options.viewpoint = viewpoint_;
+    prepared_ = PreparedCloud{};
+    detail::prepareCloud(gathered, std::move(source_indices), input_->size(), options, prepared_);
+    std::vector<int> labels(prepared_.size(), -1);
+    if (!prepared_.collinear) performSegmentation(labels);
+    if (labels.size() != prepared_.size())
+      throw Error("PlanarSegmenter(" + name() + "): the backend returned " + std::to_string(labels.size()) +
+                  " labels for " + std::to_string(prepared_.size()) + " points");
+    output = detail::finalizeSegmentation(prepared_, labels, static_cast<std::size_t>(min_points_));
+  } catch (...) {
+    deinitCompute();
+    throw;
+  }
+  deinitCompute();
+}
+
+}  // namespace paco

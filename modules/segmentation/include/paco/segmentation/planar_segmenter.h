@@ -1,0 +1,131 @@
+#pragma once
+// Stage 1 of the pipeline: group a point cloud into planar segments.
+// Usage:
+//   auto seg = paco::makePlanarSegmenter<pcl::PointNormal>("gocopp");  // or "region-growing", ...
+//   seg->setInputCloud(cloud); seg->setDistanceThreshold(0.004);      // fraction of bbox diagonal
+//   paco::PlanarSegmentation result; seg->segment(result);             // labels, planes, segments
+#include <paco/common/primitive.h>
+#include <paco/segmentation/prepared_cloud.h>
+
+#include <pcl/pcl_base.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace paco {
+
+/// Base of every planar segmentation backend, shaped like a PCL algorithm: setInputCloud,
+/// setIndices, optional setInputNormals, parameter setters, then segment().
+///
+/// segment() validates the input, drops non-finite points (with one warning; they get label -1),
+/// moves the points to a frame of unit bounding-box diagonal, estimates the normals that are
+/// missing (k nearest neighbours, oriented away from the bounding-box centre or towards a
+/// viewpoint) and calls the protected virtual performSegmentation(). It then fits every plane
+/// by least squares on its inliers, in the user's frame and units.
+///
+/// To add a backend, derive from PlanarSegmenter<PointT>, implement performSegmentation() (label
+/// the points of prepared()) and name(). Instantiated for pcl::PointXYZ and pcl::PointNormal; for
+/// another point type include <paco/segmentation/impl/planar_segmenter.hpp>.
+template <typename PointT>
+class PlanarSegmenter : public pcl::PCLBase<PointT> {
+ public:
+  using Ptr = std::shared_ptr<PlanarSegmenter<PointT>>;
+  using ConstPtr = std::shared_ptr<const PlanarSegmenter<PointT>>;
+  using PointCloud = pcl::PointCloud<PointT>;
+  using NormalCloud = pcl::PointCloud<pcl::Normal>;
+
+  PlanarSegmenter() = default;
+  ~PlanarSegmenter() override = default;
+
+  /// The backend's name, as accepted by makePlanarSegmenter ("gocopp", "ransac", ...).
+  virtual std::string name() const = 0;
+
+  /// Normals for the input cloud (same size as it). Points whose normal here is finite and
+  /// non-zero use it; the others get an estimated one. Pass nullptr to forget them.
+  /// For pcl::PointNormal input without this call, the points' own normals are used likewise.
+  void setInputNormals(const NormalCloud::ConstPtr& normals) { input_normals_ = normals; }
+  NormalCloud::ConstPtr getInputNormals() const { return input_normals_; }
+
+  /// ε, the largest point-to-plane distance of an inlier, as a fraction of the bounding-box
+  /// diagonal of the (selected, finite) input. Range (0, 1); default 0.004.
+  void setDistanceThreshold(double fraction_of_diagonal);
+  double getDistanceThreshold() const { return distance_threshold_; }
+
+  /// τ, the smallest |cos| between a point's normal and its plane's normal for the point to join
+  /// the plane. Range [0, 1]; default 0.85 (about 32°).
+  void setNormalThreshold(double min_abs_cosine);
+  double getNormalThreshold() const { return normal_threshold_; }
+
+  /// σ, the fewest points a plane may have. Range >= 3; default 50.
+  void setMinPointsPerPlane(int min_points);
+  int getMinPointsPerPlane() const { return min_points_; }
+
+  /// k, the neighbours used to estimate normals and to grow regions. Range >= 3; default 20.
+  void setNumberOfNeighbours(int k);
+  int getNumberOfNeighbours() const { return neighbours_; }
+
+  /// Threads for normal estimation (0: all cores). Default 0. The backends run on one thread.
+  void setNumberOfThreads(unsigned int threads) { threads_ = threads; }
+  unsigned int getNumberOfThreads() const { return threads_; }
+
+  /// Orient estimated normals towards this viewpoint (user frame) instead of away from the
+  /// bounding-box centre. Given normals are never flipped.
+  void setViewpoint(const Eigen::Vector3d& viewpoint) { viewpoint_ = viewpoint; }
+  void clearViewpoint() { viewpoint_.reset(); }
+
+  /// Segments the input. output.labels has one entry per input point (-1: no plane, also for
+  /// points outside the indices or with non-finite coordinates); planes are in the input's frame
+  /// and units, oriented like the majority of their points' normals; segments are sorted by
+  /// decreasing size. Throws InvalidInputError when there is no input, an index is out of
+  /// range, fewer than 3 finite points remain, or all points coincide. Collinear input gives
+  /// an empty result (with a warning).
+  void segment(PlanarSegmentation& output);
+
+  /// The working cloud of the last segment() call (normalised frame, with normals).
+  const PreparedCloud& prepared() const { return prepared_; }
+
+ protected:
+  /// Labels the points of prepared(): `labels` arrives with prepared().size() entries set to -1;
+  /// set each to a segment number (any non-negative integers; they are renumbered) or leave -1.
+  /// Thresholds in the working frame are the relative ones above, as they are.
+  virtual void performSegmentation(std::vector<int>& labels) = 0;
+
+  using pcl::PCLBase<PointT>::input_;
+  using pcl::PCLBase<PointT>::indices_;
+  using pcl::PCLBase<PointT>::initCompute;
+  using pcl::PCLBase<PointT>::deinitCompute;
+
+  double distance_threshold_ = 0.004;
+  double normal_threshold_ = 0.85;
+  int min_points_ = 50;
+  int neighbours_ = 20;
+  unsigned int threads_ = 0;
+  std::optional<Eigen::Vector3d> viewpoint_;
+  NormalCloud::ConstPtr input_normals_;
+  PreparedCloud prepared_;
+
+ private:
+  void gatherInput(pcl::PointCloud<pcl::PointNormal>& gathered, std::vector<int>& source_indices) const;
+};
+
+/// The names of the built-in backends, default first: gocopp, region-growing, ransac and, when
+/// paco was built with CGAL, efficient-ransac.
+std::vector<std::string> availablePlanarSegmenters();
+
+/// A built-in backend by name (see availablePlanarSegmenters()). Throws InvalidInputError for an
+/// unknown name, listing the known ones.
+template <typename PointT>
+typename PlanarSegmenter<PointT>::Ptr makePlanarSegmenter(const std::string& name = "gocopp");
+
+extern template class PlanarSegmenter<pcl::PointXYZ>;
+extern template class PlanarSegmenter<pcl::PointNormal>;
+extern template PlanarSegmenter<pcl::PointXYZ>::Ptr makePlanarSegmenter<pcl::PointXYZ>(const std::string&);
+extern template PlanarSegmenter<pcl::PointNormal>::Ptr makePlanarSegmenter<pcl::PointNormal>(const std::string&);
+
+}  // namespace paco

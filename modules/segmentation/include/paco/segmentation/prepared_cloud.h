@@ -1,0 +1,81 @@
+#pragma once
+// What every segmentation backend works on: the finite input points, moved to a frame with the
+// bounding box centred at the origin and a unit diagonal, each with a unit normal.
+// Usage (inside a PlanarSegmenter subclass's performSegmentation):
+//   const paco::PreparedCloud& in = prepared();           // in.points: normalised PointNormal cloud
+//   const auto& knn = in.neighbours(20);                   // k nearest neighbours, self excluded
+//   labels[i] = ...;                                       // one label per in.points point, or -1
+#include <paco/common/normalization.h>
+#include <paco/common/primitive.h>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace paco {
+
+/// The normalised working copy of a segmenter's input. Distances measured in this frame are
+/// fractions of the input's bounding-box diagonal, so relative thresholds apply as they are.
+struct PreparedCloud {
+  /// Finite selected points (centre 0, diagonal 1) with unit normals; a point whose normal could
+  /// not be estimated has a zero normal and curvature 1.
+  pcl::PointCloud<pcl::PointNormal>::Ptr points{new pcl::PointCloud<pcl::PointNormal>};
+  /// For each working point, its index in the user's input cloud.
+  std::vector<int> source_indices;
+  /// User frame -> working frame.
+  Normalization normalization;
+  /// Size of the user's input cloud (labels of the result have this size).
+  std::size_t input_size = 0;
+  /// True when at least one normal was estimated rather than given.
+  bool normals_estimated = false;
+  /// True when all points are collinear: no plane can be segmented.
+  bool collinear = false;
+  /// Kd-tree (FLANN) over `points`.
+  pcl::search::KdTree<pcl::PointNormal>::Ptr tree;
+
+  std::size_t size() const { return points->size(); }
+  /// The k nearest neighbours of every point (self excluded, nearest first), computed once per k.
+  const std::vector<std::vector<int>>& neighbours(int k) const;
+  /// Mean distance of a point to its 6 nearest neighbours, averaged over the cloud (working frame).
+  double averageSpacing() const;
+
+ private:
+  mutable std::vector<std::vector<int>> neighbours_;
+  mutable int neighbours_k_ = -1;
+  mutable std::optional<double> average_spacing_;
+};
+
+namespace detail {
+
+/// Options of PreparedCloud construction shared by every segmenter.
+struct PrepareOptions {
+  int normal_neighbours = 20;        ///< k of normal estimation
+  unsigned int threads = 0;          ///< normal estimation threads (0: all cores)
+  std::optional<Eigen::Vector3d> viewpoint;  ///< orient estimated normals towards it (user frame)
+};
+
+/// Builds the working cloud from points already gathered in the user frame (normals NaN or zero
+/// when unknown; non-finite coordinates are dropped with one warning). Throws InvalidInputError
+/// for fewer than 3 finite points or coincident points.
+void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector<int> source_indices,
+                  std::size_t input_size, const PrepareOptions& options, PreparedCloud& prepared);
+
+/// Turns per-working-point labels into the user's PlanarSegmentation: drops segments with fewer
+/// than `min_points` points (at least 3) or no unique plane, fits every plane by least squares in
+/// the working frame and maps it back to the user frame, orients it with the majority of its
+/// point normals, and sorts the segments by decreasing size.
+PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std::vector<int>& labels,
+                                        std::size_t min_points);
+
+/// Least-squares plane of some working points (throws InvalidInputError when degenerate).
+Plane fitPlane(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& indices);
+
+}  // namespace detail
+}  // namespace paco

@@ -1,0 +1,11 @@
+#pragma once
+// Everything of paco::segmentation: the PlanarSegmenter base, its four backends and the factory.
+// Usage:
+//   #include <paco/segmentation/segmentation.h>
+//   auto seg = paco::makePlanarSegmenter<pcl::PointXYZ>("region-growing");
+//   seg->setInputCloud(cloud); paco::PlanarSegmentation result; seg->segment(result);
+#include <paco/segmentation/efficient_ransac_segmenter.h>
+#include <paco/segmentation/gocopp_segmenter.h>
+#include <paco/segmentation/planar_segmenter.h>
+#include <paco/segmentation/ransac_segmenter.h>
+#include <paco/segmentation/region_growing_segmenter.h>

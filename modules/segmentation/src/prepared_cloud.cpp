@@ -1,0 +1,237 @@
+#include <paco/common/error.h>
+#include <paco/segmentation/prepared_cloud.h>
+
+#include <pcl/console/print.h>
+#include <pcl/features/normal_3d_omp.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+namespace paco {
+
+const std::vector<std::vector<int>>& PreparedCloud::neighbours(int k) const {
+  if (neighbours_k_ == k) return neighbours_;
+  const std::size_t n = size();
+  const int wanted = std::min<int>(k + 1, static_cast<int>(n));
+  neighbours_.assign(n, {});
+  pcl::Indices found;
+  std::vector<float> distances;
+  for (std::size_t i = 0; i < n; ++i) {
+    tree->nearestKSearch((*points)[i], wanted, found, distances);
+    auto& list = neighbours_[i];
+    list.reserve(found.size());
+    for (const auto j : found)
+      if (static_cast<std::size_t>(j) != i) list.push_back(static_cast<int>(j));
+    if (static_cast<int>(list.size()) > k) list.resize(static_cast<std::size_t>(k));
+  }
+  neighbours_k_ = k;
+  return neighbours_;
+}
+
+double PreparedCloud::averageSpacing() const {
+  if (average_spacing_) return *average_spacing_;
+  const std::size_t n = size();
+  const int wanted = std::min<int>(7, static_cast<int>(n));
+  double total = 0.0;
+  std::size_t counted = 0;
+  pcl::Indices found;
+  std::vector<float> sq_distances;
+  // A subsample is enough for a mean spacing and keeps this cheap on large clouds.
+  const std::size_t stride = std::max<std::size_t>(1, n / 5000);
+  for (std::size_t i = 0; i < n; i += stride) {
+    tree->nearestKSearch((*points)[i], wanted, found, sq_distances);
+    double sum = 0.0;
+    int m = 0;
+    for (std::size_t j = 0; j < found.size(); ++j) {
+      if (static_cast<std::size_t>(found[j]) == i) continue;
+      sum += std::sqrt(static_cast<double>(sq_distances[j]));
+      ++m;
+    }
+    if (m > 0) {
+      total += sum / m;
+      ++counted;
+    }
+  }
+  average_spacing_ = counted > 0 ? total / static_cast<double>(counted) : 0.0;
+  return *average_spacing_;
+}
+
+namespace detail {
+namespace {
+
+bool usableNormal(const pcl::PointNormal& p) {
+  const Eigen::Vector3f n = p.getNormalVector3fMap();
+  return n.allFinite() && n.squaredNorm() > 1e-12f;
+}
+
+}  // namespace
+
+void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector<int> source_indices,
+                  std::size_t input_size, const PrepareOptions& options, PreparedCloud& prepared) {
+  prepared.input_size = input_size;
+  auto& points = *prepared.points;
+  points.clear();
+  points.reserve(gathered.size());
+  prepared.source_indices.clear();
+  prepared.source_indices.reserve(gathered.size());
+  std::size_t dropped = 0;
+  for (std::size_t i = 0; i < gathered.size(); ++i) {
+    const auto& p = gathered[i];
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
+      ++dropped;
+      continue;
+    }
+    points.push_back(p);
+    prepared.source_indices.push_back(source_indices[i]);
+  }
+  if (dropped > 0)
+    PCL_WARN("[paco::PlanarSegmenter] dropped %zu of %zu points with NaN/Inf coordinates; they get label -1\n",
+             dropped, gathered.size());
+  if (points.size() < 3)
+    throw InvalidInputError("PlanarSegmenter: a plane needs at least 3 points with finite coordinates; the input has " +
+                            std::to_string(points.size()) +
+                            (dropped > 0 ? " (after dropping " + std::to_string(dropped) + " non-finite ones)" : std::string()) +
+                            "; give a larger cloud");
+  points.width = static_cast<std::uint32_t>(points.size());
+  points.height = 1;
+  points.is_dense = true;
+
+  // Normalization::fromBoundingBox throws InvalidInputError when all points coincide.
+  prepared.normalization = Normalization::fromBoundingBox(points);
+  prepared.normalization.apply(points);
+
+  // Collinear points: the two largest principal variances carry everything.
+  {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& p : points) mean += p.getVector3fMap().cast<double>();
+    mean /= static_cast<double>(points.size());
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    for (const auto& p : points) {
+      const Eigen::Vector3d q = p.getVector3fMap().cast<double>() - mean;
+      covariance += q * q.transpose();
+    }
+    covariance /= static_cast<double>(points.size());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
+    // In the unit-diagonal frame, a spread below ~1e-6 across the line is float noise.
+    prepared.collinear = !(solver.eigenvalues()(1) > 1e-12);
+    if (prepared.collinear)
+      PCL_WARN("[paco::PlanarSegmenter] all %zu points are collinear: no plane can be segmented\n",
+               points.size());
+  }
+
+  prepared.tree.reset(new pcl::search::KdTree<pcl::PointNormal>(false));
+  prepared.tree->setInputCloud(prepared.points);
+
+  std::vector<int> missing;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    auto& p = points[i];
+    if (usableNormal(p)) {
+      p.getNormalVector3fMap().normalize();
+      if (!std::isfinite(p.curvature)) p.curvature = 0.0f;
+    } else {
+      missing.push_back(static_cast<int>(i));
+    }
+  }
+  prepared.normals_estimated = !missing.empty();
+  if (missing.empty() || prepared.collinear) {
+    for (const int i : missing) {
+      points[static_cast<std::size_t>(i)].getNormalVector3fMap().setZero();
+      points[static_cast<std::size_t>(i)].curvature = 1.0f;
+    }
+    return;
+  }
+
+  pcl::NormalEstimationOMP<pcl::PointNormal, pcl::Normal> estimation(options.threads);
+  estimation.setInputCloud(prepared.points);
+  estimation.setSearchMethod(prepared.tree);
+  estimation.setKSearch(std::min<int>(options.normal_neighbours, static_cast<int>(points.size())));
+  estimation.setIndices(pcl::IndicesPtr(new pcl::Indices(missing.begin(), missing.end())));
+  pcl::PointCloud<pcl::Normal> normals;
+  estimation.compute(normals);
+
+  // Orientation: away from the bounding-box centre (the origin here), or towards a viewpoint.
+  std::optional<Eigen::Vector3f> viewpoint;
+  if (options.viewpoint) viewpoint = prepared.normalization.apply(*options.viewpoint).cast<float>();
+  for (std::size_t m = 0; m < missing.size(); ++m) {
+    auto& p = points[static_cast<std::size_t>(missing[m])];
+    Eigen::Vector3f n = normals[m].getNormalVector3fMap();
+    if (!n.allFinite() || n.squaredNorm() < 1e-12f) {
+      p.getNormalVector3fMap().setZero();
+      p.curvature = 1.0f;
+      continue;
+    }
+    n.normalize();
+    const Eigen::Vector3f position = p.getVector3fMap();
+    const float towards = viewpoint ? n.dot(*viewpoint - position) : n.dot(position);
+    if (towards < 0.0f) n = -n;
+    p.getNormalVector3fMap() = n;
+    p.curvature = std::isfinite(normals[m].curvature) ? normals[m].curvature : 1.0f;
+  }
+}
+
+Plane fitPlane(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& indices) {
+  std::vector<Eigen::Vector3d> xyz;
+  xyz.reserve(indices.size());
+  for (const int i : indices) xyz.push_back(points[static_cast<std::size_t>(i)].getVector3fMap().cast<double>());
+  return Plane::fit(xyz);
+}
+
+PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std::vector<int>& labels,
+                                        std::size_t min_points) {
+  const auto& points = *prepared.points;
+  min_points = std::max<std::size_t>(min_points, 3);
+  int max_label = -1;
+  for (const int l : labels) max_label = std::max(max_label, l);
+  std::vector<std::vector<int>> groups(static_cast<std::size_t>(max_label + 1));
+  for (std::size_t i = 0; i < labels.size(); ++i)
+    if (labels[i] >= 0) groups[static_cast<std::size_t>(labels[i])].push_back(static_cast<int>(i));
+
+  struct Fitted {
+    Plane plane;
+    std::vector<int> members;
+  };
+  std::vector<Fitted> fitted;
+  for (auto& group : groups) {
+    if (group.size() < min_points) continue;
+    Plane plane;
+    try {
+      plane = fitPlane(points, group);
+    } catch (const InvalidInputError&) {
+      continue;  // collinear group: no unique plane
+    }
+    // Majority vote of the point normals (zero normals abstain); without any, face outwards.
+    long votes = 0;
+    for (const int i : group) {
+      const Eigen::Vector3d n = points[static_cast<std::size_t>(i)].getNormalVector3fMap().cast<double>();
+      const double c = n.dot(plane.normal);
+      votes += c > 1e-6 ? 1 : (c < -1e-6 ? -1 : 0);
+    }
+    if (votes < 0 || (votes == 0 && plane.offset > 0)) plane = plane.flipped();
+    fitted.push_back({prepared.normalization.applyInverse(plane), std::move(group)});
+  }
+  std::stable_sort(fitted.begin(), fitted.end(),
+                   [](const Fitted& a, const Fitted& b) { return a.members.size() > b.members.size(); });
+
+  PlanarSegmentation result;
+  result.labels.assign(prepared.input_size, -1);
+  for (std::size_t s = 0; s < fitted.size(); ++s) {
+    pcl::PointIndices segment;
+    segment.indices.reserve(fitted[s].members.size());
+    for (const int i : fitted[s].members) {
+      const int source = prepared.source_indices[static_cast<std::size_t>(i)];
+      segment.indices.push_back(source);
+      result.labels[static_cast<std::size_t>(source)] = static_cast<int>(s);
+    }
+    std::sort(segment.indices.begin(), segment.indices.end());
+    result.planes.push_back(fitted[s].plane);
+    result.segments.push_back(std::move(segment));
+  }
+  return result;
+}
+
+}  // namespace detail
+}  // namespace paco

@@ -1,0 +1,106 @@
+// The paco_segment tool: good input gives exit 0 and a labelled PCD; bad input gives a non-zero
+// exit, a message, and no output file.
+#include "segmentation_fixtures.h"
+#include "shapes.h"
+#include "test_support.h"
+
+#include <paco/io/cloud_io.h>
+#include <paco/io/vertex_groups_io.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+#include <string>
+
+namespace paco {
+namespace {
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+void writeBoxCloud(const std::string& path, bool with_normals) {
+  const auto box = test::sampleShape(test::makeBox({0, 0, 0}, {2.0, 1.5, 1.0}), 3000, 21);
+  io::LabelledCloud cloud;
+  cloud.points = *box.cloud;
+  cloud.has_normals = with_normals;
+  if (!with_normals)
+    for (auto& p : cloud.points) p.normal_x = p.normal_y = p.normal_z = 0.0f;
+  io::saveCloud(path, cloud);
+}
+
+TEST(PacoSegment, WritesALabelledPcdAndVertexGroups) {
+  test::TempDir dir;
+  const std::string input = dir.file("box.ply"), output = dir.file("labelled.pcd"), vg = dir.file("planes.vg");
+  writeBoxCloud(input, true);
+  std::string log;
+  const int rc = test::runCommand(quoted(test::toolPath("paco_segment")) + " " + quoted(input) + " -o " +
+                                      quoted(output) + " --vg " + quoted(vg),
+                                  &log);
+  ASSERT_EQ(rc, 0) << log;
+  EXPECT_NE(log.find("6 planes"), std::string::npos) << log;
+  EXPECT_NE(log.find("coverage"), std::string::npos) << log;
+  const io::LabelledCloud labelled = io::loadCloud(output);
+  ASSERT_EQ(labelled.points.size(), 3000u);
+  ASSERT_TRUE(labelled.hasLabels());
+  std::set<int> labels(labelled.labels.begin(), labelled.labels.end());
+  labels.erase(-1);
+  EXPECT_EQ(labels, (std::set<int>{0, 1, 2, 3, 4, 5}));
+  const io::VertexGroups groups = io::loadVertexGroups(vg);
+  EXPECT_EQ(groups.segmentation.size(), 6u);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("labelled.partial.pcd")));
+}
+
+TEST(PacoSegment, EstimatesMissingNormalsWithAnyBackend) {
+  test::TempDir dir;
+  const std::string input = dir.file("box.xyz"), output = dir.file("labelled.pcd");
+  writeBoxCloud(input, false);
+  std::string log;
+  const int rc = test::runCommand(quoted(test::toolPath("paco_segment")) + " " + quoted(input) + " -o " +
+                                      quoted(output) + " --backend region-growing",
+                                  &log);
+  ASSERT_EQ(rc, 0) << log;
+  EXPECT_NE(log.find("region-growing: 6 planes"), std::string::npos) << log;
+  const io::LabelledCloud labelled = io::loadCloud(output);
+  EXPECT_TRUE(labelled.has_normals);
+}
+
+TEST(PacoSegment, HelpExitsZero) {
+  std::string log;
+  EXPECT_EQ(test::runCommand(quoted(test::toolPath("paco_segment")) + " --help", &log), 0);
+  EXPECT_NE(log.find("--backend"), std::string::npos) << log;
+  EXPECT_NE(log.find("--lambda-simplicity"), std::string::npos) << log;
+}
+
+TEST(PacoSegment, BadInputFailsWithAMessageAndNoOutput) {
+  test::TempDir dir;
+  const std::string output = dir.file("labelled.pcd");
+  const std::string tool = quoted(test::toolPath("paco_segment"));
+  std::string log;
+
+  // Missing file.
+  EXPECT_NE(test::runCommand(tool + " " + quoted(dir.file("missing.ply")) + " -o " + quoted(output), &log), 0);
+  EXPECT_NE(log.find("error"), std::string::npos) << log;
+
+  // Garbage file.
+  test::writeBytes(dir.file("garbage.pcd"), "this is not a point cloud\n");
+  EXPECT_NE(test::runCommand(tool + " " + quoted(dir.file("garbage.pcd")) + " -o " + quoted(output), &log), 0);
+  EXPECT_NE(log.find("error"), std::string::npos) << log;
+
+  // Two points: fewer than a plane needs.
+  test::writeBytes(dir.file("two.xyz"), "0 0 0\n1 0 0\n");
+  EXPECT_NE(test::runCommand(tool + " " + quoted(dir.file("two.xyz")) + " -o " + quoted(output), &log), 0);
+  EXPECT_NE(log.find("at least 3"), std::string::npos) << log;
+
+  // Unknown backend and bad parameter: usage errors.
+  writeBoxCloud(dir.file("box.ply"), true);
+  EXPECT_EQ(test::runCommand(tool + " " + quoted(dir.file("box.ply")) + " -o " + quoted(output) + " --backend hough", &log), 2);
+  EXPECT_NE(log.find("unknown planar segmenter"), std::string::npos) << log;
+  EXPECT_EQ(test::runCommand(tool + " " + quoted(dir.file("box.ply")) + " -o " + quoted(output) + " --epsilon -1", &log), 2);
+  EXPECT_EQ(test::runCommand(tool + " " + quoted(dir.file("box.ply")), &log), 2);
+
+  EXPECT_FALSE(std::filesystem::exists(output));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("labelled.partial.pcd")));
+}
+
+}  // namespace
+}  // namespace paco

@@ -1,0 +1,331 @@
+// PlanarSegmenter and its four backends on generated shapes with known planes, and bad input.
+#include "segmentation_fixtures.h"
+#include "shapes.h"
+
+#include <paco/common/error.h>
+#include <paco/segmentation/segmentation.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <string>
+
+namespace paco {
+namespace {
+
+using test::LabelledSample;
+
+LabelledSample cleanBox() {
+  return test::sampleShape(test::makeBox({0, 0, 0}, {1.0, 0.8, 0.6}), 3000, 7);
+}
+
+LabelledSample partialLBracket() {
+  SurfaceMesh mesh = test::makeLBracket();
+  test::transformMesh(mesh, test::obliqueRotation(), {0.3, -0.2, 0.1});
+  const LabelledSample full = test::sampleShape(mesh, 4000, 11);
+  // Drop the 30 % of points nearest a viewpoint off one corner.
+  return test::partialView(full, (test::obliqueRotation() * Eigen::Vector3d(1.6, -0.6, 1.2)).cast<float>(), 0.3);
+}
+
+class EveryBackend : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(EveryBackend, CleanBoxGivesSixPlanesWithinOneDegree) {
+  const LabelledSample box = cleanBox();
+  auto seg = makePlanarSegmenter<pcl::PointNormal>(GetParam());
+  EXPECT_EQ(seg->name(), GetParam());
+  seg->setInputCloud(box.cloud);
+  PlanarSegmentation result;
+  seg->segment(result);
+  ASSERT_EQ(result.size(), 6u);
+  ASSERT_NO_THROW(result.validate(box.cloud->size()));
+  std::set<int> matched;
+  for (const auto& plane : result.planes) {
+    int best = -1;
+    double best_cos = 0.0;
+    for (std::size_t f = 0; f < box.plane_normals.size(); ++f) {
+      const double c = plane.normal.dot(box.plane_normals[f]);  // oriented: outward like the samples
+      if (c > best_cos) {
+        best_cos = c;
+        best = static_cast<int>(f);
+      }
+    }
+    EXPECT_GT(best_cos, std::cos(1.0 * M_PI / 180.0)) << "plane normal " << plane.normal.transpose();
+    matched.insert(best);
+  }
+  EXPECT_EQ(matched.size(), 6u) << "each face gets its own plane";
+  EXPECT_GT(result.coverage(), 0.9);
+}
+
+TEST_P(EveryBackend, PartialLBracketFindsAllVisiblePlanes) {
+  const LabelledSample bracket = partialLBracket();
+  auto seg = makePlanarSegmenter<pcl::PointNormal>(GetParam());
+  seg->setInputCloud(bracket.cloud);
+  PlanarSegmentation result;
+  seg->segment(result);
+  const test::PlaneRecovery r = test::scoreRecovery(bracket, result);
+  EXPECT_GE(r.visible, 6);  // the partial view still shows most faces
+  EXPECT_EQ(r.found, r.visible);
+  EXPECT_LT(r.worst_angle_deg, 1.0);
+}
+
+TEST_P(EveryBackend, BoxWithoutNormalsEstimatesThem) {
+  const LabelledSample box = cleanBox();
+  auto seg = makePlanarSegmenter<pcl::PointXYZ>(GetParam());
+  seg->setInputCloud(test::withoutNormals(*box.cloud));
+  PlanarSegmentation result;
+  seg->segment(result);
+  EXPECT_TRUE(seg->prepared().normals_estimated);
+  const test::PlaneRecovery r = test::scoreRecovery(box, result);
+  EXPECT_EQ(r.found, 6);
+  EXPECT_LT(r.worst_angle_deg, 1.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, EveryBackend, ::testing::ValuesIn(availablePlanarSegmenters()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           std::string name = info.param;
+                           for (auto& c : name)
+                             if (c == '-') c = '_';
+                           return name;
+                         });
+
+TEST(PlanarSegmenter, DefaultBackendIsGoCoPP) {
+  EXPECT_EQ(makePlanarSegmenter<pcl::PointXYZ>()->name(), "gocopp");
+  EXPECT_EQ(availablePlanarSegmenters().front(), "gocopp");
+}
+
+TEST(PlanarSegmenter, UnknownBackendNameIsAClearError) {
+  try {
+    makePlanarSegmenter<pcl::PointXYZ>("hough");
+    FAIL() << "expected InvalidInputError";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("gocopp"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PlanarSegmenter, DistancesAreRelativeToTheDiagonal) {
+  // The same box in metres and in micrometres-scale units gives the same segmentation.
+  const LabelledSample box = cleanBox();
+  pcl::PointCloud<pcl::PointNormal>::Ptr tiny(new pcl::PointCloud<pcl::PointNormal>(*box.cloud));
+  for (auto& p : *tiny) p.getVector3fMap() *= 1e-3f;
+  GoCoPPSegmenter<pcl::PointNormal> a, b;
+  a.setInputCloud(box.cloud);
+  b.setInputCloud(tiny);
+  PlanarSegmentation ra, rb;
+  a.segment(ra);
+  b.segment(rb);
+  ASSERT_EQ(ra.size(), 6u);
+  ASSERT_EQ(rb.size(), 6u);
+  for (std::size_t s = 0; s < 6; ++s) {
+    EXPECT_GT(ra.planes[s].normal.dot(rb.planes[s].normal), 0.9999);
+    EXPECT_NEAR(ra.planes[s].offset * 1e-3, rb.planes[s].offset, 1e-5);
+  }
+}
+
+TEST(PlanarSegmenter, PlanesAreInTheUserFrameAndOrientedLikeTheNormals) {
+  const LabelledSample box = cleanBox();
+  GoCoPPSegmenter<pcl::PointNormal> seg;
+  seg.setInputCloud(box.cloud);
+  PlanarSegmentation result;
+  seg.segment(result);
+  ASSERT_EQ(result.size(), 6u);
+  for (std::size_t s = 0; s < result.size(); ++s) {
+    // Every inlier is within ε (0.004 x diagonal) of its plane, in user units.
+    const double diagonal = std::sqrt(1.0 + 0.64 + 0.36);
+    for (const int i : result.segments[s].indices) {
+      const Eigen::Vector3d x = (*box.cloud)[static_cast<std::size_t>(i)].getVector3fMap().cast<double>();
+      EXPECT_LT(std::abs(result.planes[s].signedDistance(x)), 0.004 * diagonal + 1e-6);
+      EXPECT_GT(result.planes[s].normal.dot((*box.cloud)[static_cast<std::size_t>(i)].getNormalVector3fMap().cast<double>()), 0.99);
+    }
+  }
+  // Sorted by decreasing size.
+  for (std::size_t s = 1; s < result.size(); ++s)
+    EXPECT_GE(result.segments[s - 1].indices.size(), result.segments[s].indices.size());
+}
+
+TEST(PlanarSegmenter, IndicesRestrictTheInput) {
+  const LabelledSample box = cleanBox();
+  pcl::IndicesPtr top(new pcl::Indices);
+  for (std::size_t i = 0; i < box.cloud->size(); ++i)
+    if ((*box.cloud)[i].z > 0.59f) top->push_back(static_cast<int>(i));
+  ASSERT_GT(top->size(), 300u);
+  GoCoPPSegmenter<pcl::PointNormal> seg;
+  seg.setInputCloud(box.cloud);
+  seg.setIndices(top);
+  PlanarSegmentation result;
+  seg.segment(result);
+  ASSERT_EQ(result.labels.size(), box.cloud->size());
+  ASSERT_EQ(result.size(), 1u);
+  EXPECT_GT(result.planes[0].normal.z(), 0.9999);
+  EXPECT_NEAR(result.planes[0].offset, -0.6, 1e-4);
+  std::size_t labelled = 0;
+  for (std::size_t i = 0; i < box.cloud->size(); ++i)
+    if (result.labels[i] >= 0) {
+      ++labelled;
+      EXPECT_GT((*box.cloud)[i].z, 0.59f);
+    }
+  EXPECT_GT(labelled, top->size() * 9 / 10);
+}
+
+TEST(PlanarSegmenter, NonFinitePointsAreDroppedAndLabelledNone) {
+  LabelledSample box = cleanBox();
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  (*box.cloud)[5].x = nan;
+  (*box.cloud)[17].y = inf;
+  (*box.cloud)[2999].z = -inf;
+  GoCoPPSegmenter<pcl::PointNormal> seg;
+  seg.setInputCloud(box.cloud);
+  PlanarSegmentation result;
+  seg.segment(result);
+  EXPECT_EQ(result.size(), 6u);
+  ASSERT_EQ(result.labels.size(), box.cloud->size());
+  EXPECT_EQ(result.labels[5], -1);
+  EXPECT_EQ(result.labels[17], -1);
+  EXPECT_EQ(result.labels[2999], -1);
+  EXPECT_EQ(seg.prepared().size(), box.cloud->size() - 3);
+}
+
+TEST(PlanarSegmenter, NonFiniteNormalsAreEstimated) {
+  LabelledSample box = cleanBox();
+  for (std::size_t i = 0; i < box.cloud->size(); i += 3) (*box.cloud)[i].normal_x = std::numeric_limits<float>::quiet_NaN();
+  GoCoPPSegmenter<pcl::PointNormal> seg;
+  seg.setInputCloud(box.cloud);
+  PlanarSegmentation result;
+  seg.segment(result);
+  EXPECT_TRUE(seg.prepared().normals_estimated);
+  EXPECT_EQ(test::scoreRecovery(box, result).found, 6);
+}
+
+TEST(PlanarSegmenter, SeparateNormalsAreUsed) {
+  const LabelledSample box = cleanBox();
+  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
+  for (const auto& p : *box.cloud) normals->push_back(pcl::Normal(p.normal_x, p.normal_y, p.normal_z));
+  GoCoPPSegmenter<pcl::PointXYZ> seg;
+  seg.setInputCloud(test::withoutNormals(*box.cloud));
+  seg.setInputNormals(normals);
+  PlanarSegmentation result;
+  seg.segment(result);
+  EXPECT_FALSE(seg.prepared().normals_estimated);
+  EXPECT_EQ(result.size(), 6u);
+
+  normals->resize(10);
+  EXPECT_THROW(seg.segment(result), InvalidInputError);
+}
+
+TEST(PlanarSegmenter, NoInputIsAClearError) {
+  GoCoPPSegmenter<pcl::PointXYZ> seg;
+  PlanarSegmentation result;
+  EXPECT_THROW(seg.segment(result), InvalidInputError);
+  seg.setInputCloud(pcl::PointCloud<pcl::PointXYZ>::Ptr(new pcl::PointCloud<pcl::PointXYZ>));
+  EXPECT_THROW(seg.segment(result), InvalidInputError);
+}
+
+TEST(PlanarSegmenter, FewerPointsThanAPlaneNeedsIsAClearError) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr two(new pcl::PointCloud<pcl::PointXYZ>);
+  two->push_back({0, 0, 0});
+  two->push_back({1, 0, 0});
+  GoCoPPSegmenter<pcl::PointXYZ> seg;
+  seg.setInputCloud(two);
+  PlanarSegmentation result;
+  try {
+    seg.segment(result);
+    FAIL() << "expected InvalidInputError";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 3"), std::string::npos) << e.what();
+  }
+  // Three finite points among NaNs are not enough either once the NaNs go.
+  two->push_back({std::numeric_limits<float>::quiet_NaN(), 0, 0});
+  EXPECT_THROW(seg.segment(result), InvalidInputError);
+}
+
+TEST(PlanarSegmenter, CoincidentPointsAreAClearError) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr same(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int i = 0; i < 100; ++i) same->push_back({1, 2, 3});
+  GoCoPPSegmenter<pcl::PointXYZ> seg;
+  seg.setInputCloud(same);
+  PlanarSegmentation result;
+  EXPECT_THROW(seg.segment(result), InvalidInputError);
+}
+
+TEST(PlanarSegmenter, CollinearPointsGiveNoPlane) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr line(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int i = 0; i < 200; ++i) line->push_back({0.01f * i, 0.02f * i, -0.005f * i});
+  for (const auto& name : availablePlanarSegmenters()) {
+    auto seg = makePlanarSegmenter<pcl::PointXYZ>(name);
+    seg->setInputCloud(line);
+    PlanarSegmentation result;
+    ASSERT_NO_THROW(seg->segment(result)) << name;
+    EXPECT_TRUE(result.empty()) << name;
+    ASSERT_EQ(result.labels.size(), line->size());
+    for (const int l : result.labels) EXPECT_EQ(l, -1);
+  }
+}
+
+TEST(PlanarSegmenter, FewerPointsThanSigmaGiveNoPlane) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr small(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 5; ++j) small->push_back({0.1f * i, 0.1f * j, 0.0f});
+  for (const auto& name : availablePlanarSegmenters()) {
+    auto seg = makePlanarSegmenter<pcl::PointXYZ>(name);
+    seg->setInputCloud(small);
+    PlanarSegmentation result;
+    ASSERT_NO_THROW(seg->segment(result)) << name;
+    EXPECT_TRUE(result.empty()) << name;
+    EXPECT_EQ(result.labels.size(), 30u);
+  }
+}
+
+TEST(PlanarSegmenter, IndexOutOfRangeIsAClearError) {
+  const LabelledSample box = cleanBox();
+  GoCoPPSegmenter<pcl::PointNormal> seg;
+  seg.setInputCloud(box.cloud);
+  seg.setIndices(pcl::IndicesPtr(new pcl::Indices{0, 1, 2, 99999}));
+  PlanarSegmentation result;
+  EXPECT_THROW(seg.segment(result), InvalidInputError);
+}
+
+TEST(PlanarSegmenter, BadParametersAreRejectedAtTheSetter) {
+  GoCoPPSegmenter<pcl::PointXYZ> seg;
+  EXPECT_THROW(seg.setDistanceThreshold(0.0), InvalidInputError);
+  EXPECT_THROW(seg.setDistanceThreshold(std::numeric_limits<double>::quiet_NaN()), InvalidInputError);
+  EXPECT_THROW(seg.setNormalThreshold(1.5), InvalidInputError);
+  EXPECT_THROW(seg.setMinPointsPerPlane(2), InvalidInputError);
+  EXPECT_THROW(seg.setNumberOfNeighbours(1), InvalidInputError);
+  EXPECT_THROW(seg.setLambdaSimplicity(-1.0), InvalidInputError);
+  EXPECT_THROW(seg.setMaxRounds(-1), InvalidInputError);
+  RansacSegmenter<pcl::PointXYZ> ransac;
+  EXPECT_THROW(ransac.setMaxIterations(0), InvalidInputError);
+  EfficientRansacSegmenter<pcl::PointXYZ> efficient;
+  EXPECT_THROW(efficient.setProbability(1.0), InvalidInputError);
+  RegionGrowingSegmenter<pcl::PointXYZ> growing;
+  EXPECT_THROW(growing.setCurvatureThreshold(0.5), InvalidInputError);
+}
+
+// A user backend: one plane through everything, by subclassing.
+class EverythingIsOnePlane : public PlanarSegmenter<pcl::PointXYZ> {
+ public:
+  std::string name() const override { return "one-plane"; }
+
+ protected:
+  void performSegmentation(std::vector<int>& labels) override { std::fill(labels.begin(), labels.end(), 0); }
+};
+
+TEST(PlanarSegmenter, UsersCanAddABackendBySubclassing) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr plane(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) plane->push_back({0.1f * i, 0.1f * j, 2.0f + 0.05f * i});
+  PlanarSegmenter<pcl::PointXYZ>::Ptr seg = std::make_shared<EverythingIsOnePlane>();
+  seg->setInputCloud(plane);
+  PlanarSegmentation result;
+  seg->segment(result);
+  ASSERT_EQ(result.size(), 1u);
+  // z = 2 + 0.5 x  <=>  -0.5 x + z - 2 = 0, normalised.
+  const Eigen::Vector3d expected = Eigen::Vector3d(-0.5, 0, 1).normalized();
+  EXPECT_GT(std::abs(result.planes[0].normal.dot(expected)), 1 - 1e-9);
+  EXPECT_NEAR(std::abs(result.planes[0].offset), 2.0 / std::sqrt(1.25), 1e-5);
+  EXPECT_DOUBLE_EQ(result.coverage(), 1.0);
+}
+
+}  // namespace
+}  // namespace paco
