@@ -1,0 +1,188 @@
+// paco_assemble: planar primitives -> watertight polygonal mesh (stage 4 of the pipeline).
+//   paco_assemble planes.vg -o mesh.obj [--backend polyfit|cell-complex] [--solver cbc|glpk] ...
+#include "app_support.h"
+
+#include <paco/assembly/polygonal_assembler.h>
+#include <paco/common/error.h>
+#include <paco/common/progress.h>
+#include <paco/io/cloud_io.h>
+#include <paco/io/mesh_io.h>
+#include <paco/io/vertex_groups_io.h>
+
+#include <boost/program_options.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace po = boost::program_options;
+
+namespace {
+
+const std::string kTool = "paco_assemble";
+const std::string kDefaultBackend = "polyfit";
+const std::string kDefaultSolver = "cbc";
+constexpr double kDefaultTimeLimit = 60.0;
+
+void printHelp(const po::options_description& options) {
+  std::cout << "Usage: " << kTool << " PRIMITIVES -o MESH [options]\n\n"
+            << "Assembles planar primitives into a closed, manifold, outward-oriented polygonal mesh.\n\n"
+            << "PRIMITIVES  a PolyFit vertex-group file (.vg ascii, .bvg binary), or a labelled point cloud\n"
+            << "            (.pcd/.ply/.xyz/.npy with a label / plane_id per point; label -1 = none).\n"
+            << "MESH        output mesh, by extension: .obj, .off or .ply. Written only on success.\n\n"
+            << options << "\n"
+            << "Backends:\n"
+            << "  polyfit       CGAL's PolyFit: intersect the planes into candidate faces and select a\n"
+            << "                watertight subset by a binary program (CBC by default). Best quality.\n"
+            << "  cell-complex  adaptive space partition by the planes + inside/outside min-cut. Fast.\n\n"
+            << "Exit status: 0 on success; 1 when the reconstruction fails (too few planes, parallel\n"
+            << "planes, solver failure or time-out, empty or non-watertight result); 2 for bad usage.\n";
+}
+
+std::vector<paco::PlanarPrimitive> loadPrimitives(const std::string& path) {
+  const std::string extension = paco::io::extensionOf(path);
+  if (extension == ".vg" || extension == ".bvg") return paco::io::toPrimitives(paco::io::loadVertexGroups(path));
+
+  paco::io::LabelledCloud cloud = paco::io::loadCloud(path);
+  if (!cloud.hasLabels())
+    throw paco::InvalidInputError("'" + path + "' has no per-point plane labels: segment it first with "
+                                  "paco_segment, or give a .vg/.bvg file");
+  // Labels may be any integers: number them 0..K-1 in order of appearance.
+  std::map<int, int> segment_of;
+  paco::PlanarSegmentation segmentation;
+  segmentation.labels.resize(cloud.labels.size(), -1);
+  for (std::size_t i = 0; i < cloud.labels.size(); ++i) {
+    if (cloud.labels[i] < 0) continue;
+    const auto inserted = segment_of.emplace(cloud.labels[i], static_cast<int>(segment_of.size()));
+    segmentation.labels[i] = inserted.first->second;
+  }
+  segmentation.planes.resize(segment_of.size());
+  segmentation.rebuildSegmentsFromLabels();
+  for (std::size_t k = 0; k < segmentation.segments.size(); ++k) {
+    std::vector<Eigen::Vector3d> points;
+    Eigen::Vector3d mean_normal = Eigen::Vector3d::Zero();
+    for (int i : segmentation.segments[k].indices) {
+      const auto& p = cloud.points[static_cast<std::size_t>(i)];
+      points.emplace_back(p.x, p.y, p.z);
+      mean_normal += Eigen::Vector3d(p.normal_x, p.normal_y, p.normal_z);
+    }
+    if (points.size() < 3)
+      throw paco::InvalidInputError("segment " + std::to_string(k) + " of '" + path + "' has " +
+                                    std::to_string(points.size()) + " points; a plane needs at least 3");
+    segmentation.planes[k] = paco::Plane::fit(points, mean_normal);
+  }
+  return paco::makePrimitives(cloud.points, segmentation);
+}
+
+int run(int argc, char** argv) {
+  std::string input, output, backend = kDefaultBackend, solver = kDefaultSolver;
+  double time_limit = kDefaultTimeLimit, fitting = 0.43, coverage = 0.27, complexity = 0.30, smoothness = 0.2;
+  std::size_t min_support = 10;
+  double merge_distance = 0.005, merge_angle = 2.0;
+  po::options_description options("Options");
+  options.add_options()
+      ("help,h", "print this help and exit")
+      ("output,o", po::value(&output), "output mesh (.obj, .off, .ply)")
+      ("backend,b", po::value(&backend)->default_value(kDefaultBackend), "polyfit | cell-complex")
+      ("solver", po::value(&solver)->default_value(kDefaultSolver), "MIP solver of polyfit: cbc | glpk")
+      ("time-limit", po::value(&time_limit)->default_value(kDefaultTimeLimit, "60"),
+       "time budget in seconds; polyfit keeps the best solution found by then")
+      ("fitting", po::value(&fitting)->default_value(0.43, "0.43"), "polyfit data-fitting weight (>= 0)")
+      ("coverage", po::value(&coverage)->default_value(0.27, "0.27"), "polyfit coverage weight (>= 0)")
+      ("complexity", po::value(&complexity)->default_value(0.30, "0.30"), "polyfit complexity weight (>= 0)")
+      ("smoothness", po::value(&smoothness)->default_value(0.2, "0.2"), "cell-complex area weight (> 0)")
+      ("min-support", po::value(&min_support)->default_value(10), "drop primitives with fewer points (>= 3)")
+      ("merge-angle", po::value(&merge_angle)->default_value(2.0, "2"),
+       "merge near-duplicate planes closer than this angle (degrees) ...")
+      ("merge-distance", po::value(&merge_distance)->default_value(0.005, "0.005"),
+       "... and this mean point distance (fraction of the diagonal; 0: never merge)")
+      ("verbose,v", "print the MIP solver's log");
+  po::options_description hidden;
+  hidden.add_options()("input", po::value(&input));
+  po::options_description all;
+  all.add(options).add(hidden);
+  po::positional_options_description positional;
+  positional.add("input", 1);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  if (vm.count("help")) {
+    printHelp(options);
+    return 0;
+  }
+  if (input.empty()) throw paco::app::UsageError("missing input file (PRIMITIVES)");
+  if (output.empty()) throw paco::app::UsageError("missing output mesh (-o MESH)");
+  const std::string out_extension = paco::io::extensionOf(output);
+  if (out_extension != ".obj" && out_extension != ".off" && out_extension != ".ply")
+    throw paco::app::UsageError("output '" + output + "' must end in .obj, .off or .ply");
+
+  paco::PolygonalAssembler assembler;
+  try {
+    assembler.setBackend(backend);
+    assembler.setMipSolver(solver);
+    assembler.setTimeLimit(time_limit);
+    assembler.setFittingWeight(fitting);
+    assembler.setCoverageWeight(coverage);
+    assembler.setComplexityWeight(complexity);
+    assembler.setSmoothness(smoothness);
+    assembler.setMinSupport(min_support);
+    assembler.setMergeAngle(merge_angle * 3.14159265358979323846 / 180.0);
+    assembler.setMergeDistance(merge_distance);
+  } catch (const paco::InvalidInputError& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  assembler.setVerbose(vm.count("verbose") > 0);
+
+  paco::InterruptGuard interrupt_guard;
+  paco::app::StageTimer timer;
+  timer.start("load");
+  assembler.setInputPrimitives(loadPrimitives(input));
+  timer.stop();
+  std::printf("loaded %zu primitives from %s\n", assembler.getInputPrimitives().size(), input.c_str());
+
+  timer.start("assemble");
+  paco::SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  timer.stop();
+  if (result.num_merged || result.num_dropped)
+    std::printf("pre-processing: %zu planes merged as near-duplicates, %zu dropped for too few points\n",
+                result.num_merged, result.num_dropped);
+  if (!result.ok())
+    throw paco::Error("assembly failed (" + paco::toString(result.status) + "): " + result.message);
+  if (assembler.getBackend() == paco::AssemblyBackend::PolyFit)
+    std::printf("polyfit: %zu candidate faces (%.3f s), MIP %zu variables x %zu constraints solved %s in %.3f s\n",
+                result.num_candidate_faces, result.seconds_partition, result.num_variables, result.num_constraints,
+                result.solution_is_optimal ? "to optimality" : "(not proven optimal)", result.seconds_solve);
+  else
+    std::printf("cell-complex: %zu cells (%.3f s), %zu cell faces, labelling and mesh %.3f s\n", result.num_cells,
+                result.seconds_partition, result.num_candidate_faces, result.seconds_solve);
+  if (result.hit_time_limit) std::printf("note: the time limit was reached; the best solution found is used\n");
+
+  timer.start("save");
+  paco::app::PendingOutput pending(output);
+  paco::io::saveMesh(pending.writePath(), mesh);
+  pending.commit();
+  timer.stop();
+
+  std::printf("%s (%s%s): %zu planes used, %zu faces, %zu vertices, %s, volume %.6g\n", output.c_str(),
+              paco::toString(assembler.getBackend()).c_str(),
+              assembler.getBackend() == paco::AssemblyBackend::PolyFit
+                  ? (std::string(", ") + paco::toString(assembler.getMipSolver())).c_str()
+                  : "",
+              result.num_planes_used, mesh.faces.size(), mesh.vertices.size(),
+              result.topology.isClosedManifold() ? "closed" : "NOT closed", paco::signedVolume(mesh));
+  timer.print();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return paco::app::runTool(kTool, [&] { return run(argc, argv); });
+}

@@ -1,0 +1,199 @@
+#pragma once
+// Usage:
+//   paco::PolygonalAssembler assembler;                 // backend "polyfit" (CGAL + CBC) by default
+//   assembler.setInputPrimitives(primitives); assembler.setBackend("cell-complex");
+//   pcl::PolygonMesh mesh; if (!assembler.reconstruct(mesh).ok()) std::cerr << assembler.getResult().message;
+#include <paco/common/primitive.h>
+#include <paco/common/surface_mesh.h>
+
+#include <pcl/PolygonMesh.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace paco {
+
+/// Why a reconstruction succeeded or failed.
+enum class AssemblyStatus {
+  Success,           ///< a closed, manifold, outward-oriented mesh was produced
+  NotRun,            ///< reconstruct() has not been called yet
+  EmptyInput,        ///< no primitives, or no inlier points at all
+  InvalidInput,      ///< non-finite coordinates or planes
+  TooFewPlanes,      ///< fewer than 4 planes left after merging and dropping
+  DegeneratePlanes,  ///< the plane normals do not span 3-D (e.g. all parallel): no closed volume
+  EmptySolution,     ///< the optimisation selected no face (or no inside cell)
+  SolverFailed,      ///< the MIP solver or the geometry kernel failed
+  TimeLimit,         ///< the time budget ran out before any solution was found
+  Interrupted,       ///< the user pressed Ctrl-C (paco::interruptRequested())
+  NotWatertight,     ///< a mesh was produced but it is not closed, manifold and oriented
+};
+
+/// Short name of a status, e.g. "too-few-planes".
+std::string toString(AssemblyStatus status);
+
+/// The assembly backends shipped with paco.
+enum class AssemblyBackend {
+  PolyFit,      ///< CGAL Polygonal_surface_reconstruction: candidate faces + binary program (MIP)
+  CellComplex,  ///< adaptive binary space partition of the box + inside/outside s-t min-cut
+};
+/// The MIP solvers the PolyFit backend can use.
+enum class MipSolver { Cbc, Glpk };
+
+/// "polyfit" | "cell-complex" (also "cellcomplex", "cell_complex"); throws InvalidInputError.
+AssemblyBackend backendFromString(const std::string& name);
+std::string toString(AssemblyBackend backend);
+/// "cbc" | "glpk"; throws InvalidInputError.
+MipSolver mipSolverFromString(const std::string& name);
+std::string toString(MipSolver solver);
+
+/// What happened to one input primitive during pre-processing.
+struct PrimitiveFate {
+  enum Kind { Kept, MergedInto, Dropped } kind = Kept;
+  std::size_t target = 0;  ///< for MergedInto: the index (in the input) of the primitive it joined
+  std::string reason;      ///< for MergedInto/Dropped: why, e.g. "12 points < minimum support 20"
+};
+
+/// Everything reconstruct() learned: the status with a message that says why it failed, what
+/// pre-processing did, the solver's outcome and the mesh's topology.
+struct AssemblyResult {
+  AssemblyStatus status = AssemblyStatus::NotRun;
+  std::string message;                 ///< human-readable reason (empty on plain success)
+  std::vector<PrimitiveFate> fates;    ///< one per input primitive
+  std::size_t num_input_planes = 0;
+  std::size_t num_planes_used = 0;     ///< after merging near-duplicates and dropping weak ones
+  std::size_t num_merged = 0, num_dropped = 0;
+  bool solution_is_optimal = false;    ///< polyfit: the MIP was solved to optimality
+  bool hit_time_limit = false;         ///< the budget ran out (the best solution found was used)
+  std::size_t num_candidate_faces = 0; ///< polyfit: candidate faces; cell-complex: cell faces
+  std::size_t num_cells = 0;           ///< cell-complex: cells of the partition
+  std::size_t num_variables = 0, num_constraints = 0;  ///< polyfit: size of the MIP
+  MeshTopology topology;               ///< of the output mesh
+  double seconds = 0.0;                ///< wall time of reconstruct()
+  double seconds_partition = 0.0;      ///< polyfit: candidate generation; cell-complex: partition
+  double seconds_solve = 0.0;          ///< polyfit: the MIP; cell-complex: votes + min-cut + mesh
+  bool ok() const { return status == AssemblyStatus::Success; }
+};
+
+/// Stage 4 of the pipeline: planar primitives -> a compact, watertight polygonal mesh in the
+/// primitives' own frame and units. Shaped like a PCL algorithm: set the input, set parameters,
+/// call reconstruct(). reconstruct() validates and pre-processes the input (initCompute), then
+/// calls the protected virtual performReconstruction(), then checks and orients the result.
+/// Subclass and override performReconstruction() to add a backend.
+class PolygonalAssembler {
+ public:
+  using Ptr = std::shared_ptr<PolygonalAssembler>;
+  using ConstPtr = std::shared_ptr<const PolygonalAssembler>;
+
+  PolygonalAssembler();
+  virtual ~PolygonalAssembler();
+
+  /// The primitives to assemble: planes plus inlier points with normals (points without normals,
+  /// i.e. zero normals, take the plane's). Any frame and unit.
+  void setInputPrimitives(std::vector<PlanarPrimitive> primitives);
+  /// Convenience: one primitive per segment of `segmentation` of `cloud` (paco::makePrimitives).
+  void setInputCloud(const pcl::PointCloud<pcl::PointNormal>& cloud, const PlanarSegmentation& segmentation);
+  const std::vector<PlanarPrimitive>& getInputPrimitives() const { return input_; }
+
+  /// Selects the backend by name: "polyfit" (default) or "cell-complex". Throws InvalidInputError.
+  void setBackend(const std::string& name) { backend_ = backendFromString(name); }
+  void setBackend(AssemblyBackend backend) { backend_ = backend; }
+  AssemblyBackend getBackend() const { return backend_; }
+
+  /// PolyFit: MIP solver, "cbc" (default, COIN-OR CBC) or "glpk".
+  void setMipSolver(const std::string& name) { solver_ = mipSolverFromString(name); }
+  void setMipSolver(MipSolver solver) { solver_ = solver; }
+  MipSolver getMipSolver() const { return solver_; }
+
+  /// PolyFit energy weights (each >= 0, not all 0). Defaults 0.43 / 0.27 / 0.30 as in PolyFit.
+  void setFittingWeight(double w);     ///< data fitting: rewards faces supported by many points
+  void setCoverageWeight(double w);    ///< coverage: penalises face area not covered by points
+  void setComplexityWeight(double w);  ///< complexity: penalises sharp edges
+  double getFittingWeight() const { return wt_fitting_; }
+  double getCoverageWeight() const { return wt_coverage_; }
+  double getComplexityWeight() const { return wt_complexity_; }
+
+  /// Time budget of reconstruct() in seconds (> 0; default 60). PolyFit: the MIP solver stops at
+  /// the budget left after candidate generation and the best solution found is used (status
+  /// TimeLimit when there is none; GLPK keeps no solution). Cell-complex: checked between steps.
+  void setTimeLimit(double seconds);
+  double getTimeLimit() const { return time_limit_; }
+
+  /// Print the MIP solver's own log to stdout (default false: silent).
+  void setVerbose(bool verbose) { verbose_ = verbose; }
+
+  /// Pre-processing: two primitives are merged when their planes differ by less than this angle
+  /// (radians, unoriented; default 2 degrees) ...
+  void setMergeAngle(double radians);
+  /// ... and each one's points lie on average closer than this to the other's plane, as a
+  /// fraction of the bounding-box diagonal of all points (default 0.005). 0 disables merging.
+  void setMergeDistance(double fraction_of_diagonal);
+  /// Primitives with fewer inlier points than this are dropped (default 10, minimum 3).
+  void setMinSupport(std::size_t points);
+
+  /// Cell-complex: weight of the surface-area (smoothness) term relative to the point votes,
+  /// > 0, default 0.2. Larger closes holes with fewer, larger faces; smaller follows the points.
+  void setSmoothness(double beta);
+  double getSmoothness() const { return smoothness_; }
+  /// Cell-complex: how far a primitive's plane reaches beyond its points when it splits cells,
+  /// as a fraction of the bounding-box diagonal (default 0.02). Larger: more cells, more robust
+  /// to missing data; 0: only where the points are. When the result is not a closed manifold,
+  /// the backend retries with 2x and then 4x this margin.
+  void setExtentMargin(double fraction_of_diagonal);
+
+  /// Runs pre-processing and the backend. On success `mesh` is closed, manifold and oriented with
+  /// outward normals, in the input frame and units. On failure `mesh` is cleared, except for
+  /// NotWatertight where the (defective) mesh is kept for inspection. The result is also kept
+  /// in getResult().
+  const AssemblyResult& reconstruct(SurfaceMesh& mesh);
+  const AssemblyResult& reconstruct(pcl::PolygonMesh& mesh);
+  const AssemblyResult& getResult() const { return result_; }
+
+  /// The primitives after merging and dropping, in the input frame (valid after reconstruct()).
+  const std::vector<PlanarPrimitive>& getUsedPrimitives() const { return used_; }
+
+ protected:
+  /// Validates the input and pre-processes it into `used_`; on failure sets result_ and returns
+  /// false.
+  virtual bool initCompute();
+  /// The backend. `primitives` are in a normalised frame (centre at the origin, bounding-box
+  /// diagonal 1). Fills `mesh` in that frame and sets result_.status (and message) on failure.
+  /// The base class checks, welds and orients the mesh afterwards.
+  virtual void performReconstruction(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh);
+  /// What reconstruct() does to the backend's mesh (normalised frame): welds vertices (1e-7),
+  /// orients faces consistently and outward, merges coplanar faces per planar region, drops
+  /// collinear vertices, separates sheets touching along an edge. Returns the topology.
+  static MeshTopology postProcess(SurfaceMesh& mesh);
+  /// Seconds left of the time budget.
+  double secondsLeft() const;
+  void fail(AssemblyStatus status, const std::string& message);
+
+  std::vector<PlanarPrimitive> input_;
+  std::vector<PlanarPrimitive> used_;
+  AssemblyResult result_;
+  AssemblyBackend backend_ = AssemblyBackend::PolyFit;
+  MipSolver solver_ = MipSolver::Cbc;
+  double wt_fitting_ = 0.43, wt_coverage_ = 0.27, wt_complexity_ = 0.30;
+  double time_limit_ = 60.0;
+  bool verbose_ = false;
+  double merge_angle_;
+  double merge_distance_ = 0.005;
+  std::size_t min_support_ = 10;
+  double smoothness_ = 0.2;
+  double extent_margin_ = 0.02;
+  double start_time_ = 0.0;
+};
+
+/// Merges near-duplicate planes and drops weakly supported primitives (the pre-processing of
+/// PolygonalAssembler, usable on its own). Returns the kept primitives (merged ones refitted to
+/// the union of their points) and fills `fates` with one entry per input primitive.
+/// `merge_distance` is absolute (same unit as the points); `merge_angle` in radians.
+std::vector<PlanarPrimitive> mergeAndFilterPrimitives(const std::vector<PlanarPrimitive>& primitives,
+                                                      double merge_angle, double merge_distance,
+                                                      std::size_t min_support,
+                                                      std::vector<PrimitiveFate>* fates = nullptr);
+
+}  // namespace paco

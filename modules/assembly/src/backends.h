@@ -1,0 +1,40 @@
+#pragma once
+// The two assembly backends, as plain functions on primitives in a normalised frame (centre at
+// the origin, bounding-box diagonal 1). Private to paco::assembly: CGAL and CBC stay in the .cpp.
+#include <paco/assembly/polygonal_assembler.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace paco::detail {
+
+struct BackendOutcome {
+  AssemblyStatus status = AssemblyStatus::Success;
+  std::string message;
+  bool optimal = false;
+  bool hit_time_limit = false;
+  double seconds_partition = 0.0, seconds_solve = 0.0;
+  std::size_t num_candidate_faces = 0, num_cells = 0, num_variables = 0, num_constraints = 0;
+};
+
+struct PolyFitOptions {
+  MipSolver solver = MipSolver::Cbc;
+  double wt_fitting = 0.43, wt_coverage = 0.27, wt_complexity = 0.30;
+  double seconds = 60.0;  ///< budget for the whole backend call
+  bool verbose = false;
+};
+
+BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const PolyFitOptions& options,
+                          SurfaceMesh& mesh);
+
+struct CellComplexOptions {
+  double smoothness = 0.2;
+  double extent_margin = 0.02;  ///< in normalised units (diagonal 1)
+  double seconds = 60.0;
+};
+
+BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, const CellComplexOptions& options,
+                              SurfaceMesh& mesh);
+
+}  // namespace paco::detail

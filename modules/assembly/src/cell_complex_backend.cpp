@@ -1,0 +1,529 @@
+// The "cell-complex" backend (the idea behind KSR, COMPOD and abspy): an adaptive binary space
+// partition of the enlarged bounding box by the primitives' planes, inside/outside labelling of
+// the convex cells by an s-t min-cut, and the boundary between the labels as the mesh.
+//
+// Geometry is in doubles in the normalised frame (diagonal 1) with explicit tolerances: a vertex
+// within kOnPlane of a plane is on it, and cells are only split by planes that leave vertices
+// further than that on both sides. Shared corners computed twice differ by ~1e-15 and are welded.
+#include "backends.h"
+#include "mesh_cleanup.h"
+
+#include <paco/common/progress.h>
+
+// Boost.Graph's edge iterators trip GCC's -Wmaybe-uninitialized after inlining (a false positive
+// inside Boost, reported at Boost's lines).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <boost/graph/adjacency_list.hpp>
+#include <boost/graph/boykov_kolmogorov_max_flow.hpp>
+#pragma GCC diagnostic pop
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <vector>
+
+namespace paco::detail {
+namespace {
+
+constexpr double kOnPlane = 1e-9;      // classification tolerance (normalised units)
+constexpr double kMinArea = 1e-14;     // faces smaller than this are dropped
+constexpr double kVoteOffset = 1e-6;   // how far off its plane a point is moved to find its cells
+constexpr double kWeldTolerance = 1e-8;
+
+struct Face {
+  std::vector<Eigen::Vector3d> polygon;  // counter-clockwise seen from outside the cell
+  int plane = -1;                        // index into the plane list (primitives, then box planes)
+  int sign = 1;                          // +1: outward normal == plane normal, -1: opposite
+};
+
+struct Cell {
+  std::vector<Face> faces;
+};
+
+struct BspNode {
+  int plane = -1;  // -1 for a leaf
+  int negative = -1, positive = -1;
+  int cell = -1;   // leaf: index of the cell
+};
+
+// An orthonormal basis (u, v) of a plane with u x v = n.
+struct PlaneFrame {
+  Eigen::Vector3d origin, u, v, n;
+  explicit PlaneFrame(const Plane& plane) : origin(plane.foot()), n(plane.normal) {
+    const Eigen::Vector3d helper = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    u = n.cross(helper).normalized();
+    v = n.cross(u);
+  }
+  Eigen::Vector2d project(const Eigen::Vector3d& x) const { return {(x - origin).dot(u), (x - origin).dot(v)}; }
+};
+
+double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+double polygonArea2d(const std::vector<Eigen::Vector2d>& p) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) a += cross2(p[i], p[(i + 1) % p.size()]);
+  return 0.5 * a;
+}
+
+double polygonArea3d(const std::vector<Eigen::Vector3d>& p) {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < p.size(); ++i) n += p[i].cross(p[(i + 1) % p.size()]);
+  return 0.5 * n.norm();
+}
+
+// Andrew's monotone chain; counter-clockwise, no collinear points.
+std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points) {
+  std::sort(points.begin(), points.end(),
+            [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  if (points.size() < 3) return points;
+  std::vector<Eigen::Vector2d> hull(2 * points.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    while (k >= 2 && cross2(hull[k - 1] - hull[k - 2], points[i] - hull[k - 2]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  for (std::size_t i = points.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross2(hull[k - 1] - hull[k - 2], points[i] - hull[k - 2]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+// Separating-axis test of two convex 2-D polygons: true when they come closer than `margin`.
+bool convexPolygonsWithin(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b, double margin) {
+  auto separated_along_edges = [&](const std::vector<Eigen::Vector2d>& edges_of) {
+    for (std::size_t i = 0; i < edges_of.size(); ++i) {
+      const Eigen::Vector2d e = edges_of[(i + 1) % edges_of.size()] - edges_of[i];
+      if (e.norm() < 1e-15) continue;
+      const Eigen::Vector2d axis = Eigen::Vector2d(-e.y(), e.x()).normalized();
+      double a_min = 1e300, a_max = -1e300, b_min = 1e300, b_max = -1e300;
+      for (const auto& p : a) a_min = std::min(a_min, p.dot(axis)), a_max = std::max(a_max, p.dot(axis));
+      for (const auto& p : b) b_min = std::min(b_min, p.dot(axis)), b_max = std::max(b_max, p.dot(axis));
+      if (a_min > b_max + margin || b_min > a_max + margin) return true;
+    }
+    return false;
+  };
+  return !separated_along_edges(a) && !separated_along_edges(b);
+}
+
+// Where a primitive's plane may split cells: the convex hull of its points in the plane.
+struct Extent {
+  PlaneFrame frame;
+  std::vector<Eigen::Vector2d> hull;
+  double area = 0.0;
+};
+
+Extent makeExtent(const PlanarPrimitive& primitive) {
+  Extent extent{PlaneFrame(primitive.plane), {}, 0.0};
+  std::vector<Eigen::Vector2d> projected;
+  projected.reserve(primitive.points.size());
+  for (const auto& p : primitive.points) projected.push_back(extent.frame.project(Eigen::Vector3d(p.x, p.y, p.z)));
+  extent.hull = convexHull(projected);
+  extent.area = extent.hull.size() >= 3 ? polygonArea2d(extent.hull) : 0.0;
+  if (extent.hull.size() < 3) {  // collinear points: use their bounding rectangle, slightly widened
+    Eigen::Vector2d lo = projected.front(), hi = projected.front();
+    for (const auto& q : projected) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+    lo.array() -= 1e-6;
+    hi.array() += 1e-6;
+    extent.hull = {lo, {hi.x(), lo.y()}, hi, {lo.x(), hi.y()}};
+  }
+  return extent;
+}
+
+// Clips a polygon to the side of `plane` given by `side` (-1: n.x + d <= 0, +1: >= 0); vertices
+// within kOnPlane of the plane are kept on both sides.
+std::vector<Eigen::Vector3d> clipPolygon(const std::vector<Eigen::Vector3d>& polygon, const std::vector<double>& s,
+                                         int side) {
+  std::vector<Eigen::Vector3d> out;
+  const std::size_t n = polygon.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t j = (i + 1) % n;
+    const double si = side * s[i], sj = side * s[j];
+    if (si >= -kOnPlane) out.push_back(polygon[i]);
+    if ((si > kOnPlane && sj < -kOnPlane) || (si < -kOnPlane && sj > kOnPlane))
+      out.push_back(polygon[i] + (polygon[j] - polygon[i]) * (s[i] / (s[i] - s[j])));
+  }
+  return out;
+}
+
+// Splits `cell` by `plane` (index `plane_index`). Returns false when the plane does not cross the
+// cell's interior or the cross-section does not reach `extent` (then nothing is changed).
+bool splitCell(const Cell& cell, const Plane& plane, int plane_index, const Extent* extent, double margin,
+               Cell& negative, Cell& positive) {
+  bool below = false, above = false;
+  for (const auto& f : cell.faces)
+    for (const auto& x : f.polygon) {
+      const double s = plane.signedDistance(x);
+      below |= s < -kOnPlane;
+      above |= s > kOnPlane;
+    }
+  if (!below || !above) return false;
+
+  // The cross-section: vertices on the plane and edge crossings, ordered around their centroid.
+  std::vector<Eigen::Vector3d> section;
+  std::vector<std::vector<double>> distances(cell.faces.size());
+  for (std::size_t fi = 0; fi < cell.faces.size(); ++fi) {
+    const auto& poly = cell.faces[fi].polygon;
+    auto& s = distances[fi];
+    s.resize(poly.size());
+    for (std::size_t i = 0; i < poly.size(); ++i) s[i] = plane.signedDistance(poly[i]);
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const std::size_t j = (i + 1) % poly.size();
+      if (std::abs(s[i]) <= kOnPlane) section.push_back(poly[i]);
+      if ((s[i] > kOnPlane && s[j] < -kOnPlane) || (s[i] < -kOnPlane && s[j] > kOnPlane))
+        section.push_back(poly[i] + (poly[j] - poly[i]) * (s[i] / (s[i] - s[j])));
+    }
+  }
+  std::vector<Eigen::Vector3d> unique;
+  for (const auto& x : section) {
+    bool seen = false;
+    for (const auto& y : unique) seen |= (x - y).squaredNorm() < kWeldTolerance * kWeldTolerance;
+    if (!seen) unique.push_back(x);
+  }
+  if (unique.size() < 3) return false;
+  const PlaneFrame frame(plane);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& x : unique) centroid += x;
+  centroid /= static_cast<double>(unique.size());
+  std::vector<std::pair<double, Eigen::Vector3d>> by_angle;
+  for (const auto& x : unique) {
+    const Eigen::Vector3d d = x - centroid;
+    by_angle.emplace_back(std::atan2(d.dot(frame.v), d.dot(frame.u)), x);
+  }
+  std::sort(by_angle.begin(), by_angle.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<Eigen::Vector3d> cap;  // counter-clockwise around the plane normal
+  for (const auto& [angle, x] : by_angle) cap.push_back(x);
+  if (polygonArea3d(cap) < kMinArea) return false;
+
+  if (extent) {
+    std::vector<Eigen::Vector2d> cap2d;
+    for (const auto& x : cap) cap2d.push_back(extent->frame.project(x));
+    if (!convexPolygonsWithin(cap2d, extent->hull, margin)) return false;
+  }
+
+  negative.faces.clear();
+  positive.faces.clear();
+  for (std::size_t fi = 0; fi < cell.faces.size(); ++fi) {
+    const Face& f = cell.faces[fi];
+    for (int side : {-1, 1}) {
+      Face piece{clipPolygon(f.polygon, distances[fi], side), f.plane, f.sign};
+      if (piece.polygon.size() >= 3 && polygonArea3d(piece.polygon) >= kMinArea)
+        (side < 0 ? negative : positive).faces.push_back(std::move(piece));
+    }
+  }
+  negative.faces.push_back(Face{cap, plane_index, +1});
+  std::reverse(cap.begin(), cap.end());
+  positive.faces.push_back(Face{std::move(cap), plane_index, -1});
+  return true;
+}
+
+// Intersection of two convex 2-D polygons (both counter-clockwise), carrying 3-D positions along.
+struct Vertex2 {
+  Eigen::Vector2d p;
+  Eigen::Vector3d x;
+};
+
+std::vector<Vertex2> clipConvex(std::vector<Vertex2> subject, const std::vector<Vertex2>& clip) {
+  for (std::size_t i = 0; i < clip.size() && !subject.empty(); ++i) {
+    const Eigen::Vector2d a = clip[i].p, b = clip[(i + 1) % clip.size()].p;
+    const Eigen::Vector2d edge = b - a;
+    const double length = edge.norm();
+    if (length < 1e-15) continue;
+    auto side = [&](const Eigen::Vector2d& q) { return cross2(edge, q - a) / length; };  // > 0: inside
+    std::vector<Vertex2> out;
+    for (std::size_t k = 0; k < subject.size(); ++k) {
+      const Vertex2& c = subject[k];
+      const Vertex2& d = subject[(k + 1) % subject.size()];
+      const double sc = side(c.p), sd = side(d.p);
+      if (sc >= -kOnPlane) out.push_back(c);
+      if ((sc > kOnPlane && sd < -kOnPlane) || (sc < -kOnPlane && sd > kOnPlane)) {
+        const double t = sc / (sc - sd);
+        out.push_back({c.p + (d.p - c.p) * t, c.x + (d.x - c.x) * t});
+      }
+    }
+    subject = std::move(out);
+  }
+  return subject;
+}
+
+// A face of the output before welding, oriented outward.
+struct OutputPolygon {
+  std::vector<Eigen::Vector3d> polygon;
+};
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, const CellComplexOptions& options,
+                              SurfaceMesh& mesh) {
+  const auto start = std::chrono::steady_clock::now();
+  BackendOutcome outcome;
+  mesh = SurfaceMesh{};
+  const int num_primitives = static_cast<int>(primitives.size());
+
+  // Planes: the primitives', then the six of the enlarged bounding box (outward normals).
+  std::vector<Plane> planes;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
+  for (const auto& p : primitives) {
+    planes.push_back(p.plane);
+    for (const auto& q : p.points) {
+      lo = lo.cwiseMin(Eigen::Vector3d(q.x, q.y, q.z));
+      hi = hi.cwiseMax(Eigen::Vector3d(q.x, q.y, q.z));
+    }
+  }
+  const double pad = 0.05 * std::max(1e-9, (hi - lo).norm());
+  lo.array() -= pad;
+  hi.array() += pad;
+  for (int axis = 0; axis < 3; ++axis) {
+    planes.emplace_back(-Eigen::Vector3d::Unit(axis), lo[axis]);   // -x + lo <= 0 inside
+    planes.emplace_back(Eigen::Vector3d::Unit(axis), -hi[axis]);   //  x - hi <= 0 inside
+  }
+
+  // The box as the root cell: each face counter-clockwise seen from outside.
+  Cell root;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    for (int high = 0; high < 2; ++high) {
+      auto corner = [&](int i, int j) {
+        Eigen::Vector3d x;
+        x[axis] = high ? hi[axis] : lo[axis];
+        x[a1] = i ? hi[a1] : lo[a1];
+        x[a2] = j ? hi[a2] : lo[a2];
+        return x;
+      };
+      std::vector<Eigen::Vector3d> poly = {corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)};
+      // (a1, a2, axis) is right-handed, so this order faces +axis; reverse it for the low side.
+      if (!high) std::reverse(poly.begin(), poly.end());
+      root.faces.push_back(Face{std::move(poly), num_primitives + 2 * axis + high, 1});
+    }
+  }
+
+  // Adaptive BSP: large primitives first; a primitive splits a cell only where its extent reaches.
+  std::vector<Extent> extents;
+  extents.reserve(primitives.size());
+  for (const auto& p : primitives) extents.push_back(makeExtent(p));
+  std::vector<int> order(num_primitives);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return extents[a].area > extents[b].area; });
+
+  std::vector<BspNode> nodes(1);
+  std::vector<Cell> cells;
+  struct Pending {
+    int node;
+    Cell cell;
+    std::vector<int> candidates;
+  };
+  std::vector<Pending> stack;
+  stack.push_back({0, std::move(root), order});
+  std::size_t splits = 0;
+  while (!stack.empty()) {
+    Pending work = std::move(stack.back());
+    stack.pop_back();
+    bool was_split = false;
+    for (std::size_t c = 0; c < work.candidates.size() && !was_split; ++c) {
+      const int k = work.candidates[c];
+      Cell negative, positive;
+      if (!splitCell(work.cell, planes[k], k, &extents[k], options.extent_margin, negative, positive)) continue;
+      was_split = true;
+      std::vector<int> rest(work.candidates.begin() + static_cast<std::ptrdiff_t>(c) + 1, work.candidates.end());
+      nodes[work.node].plane = k;
+      nodes[work.node].negative = static_cast<int>(nodes.size());
+      nodes[work.node].positive = static_cast<int>(nodes.size()) + 1;
+      nodes.emplace_back();
+      nodes.emplace_back();
+      stack.push_back({nodes[work.node].positive, std::move(positive), rest});
+      stack.push_back({nodes[work.node].negative, std::move(negative), std::move(rest)});
+    }
+    if (!was_split) {
+      nodes[work.node].cell = static_cast<int>(cells.size());
+      cells.push_back(std::move(work.cell));
+    }
+    if ((++splits & 255) == 0) {
+      if (interruptRequested()) {
+        outcome.status = AssemblyStatus::Interrupted;
+        outcome.message = "interrupted while partitioning space";
+        return outcome;
+      }
+      if (secondsSince(start) > options.seconds) {
+        outcome.status = AssemblyStatus::TimeLimit;
+        outcome.message = "the space partition did not finish within the time limit (" +
+                          std::to_string(cells.size()) + " cells so far)";
+        return outcome;
+      }
+    }
+  }
+  outcome.num_cells = cells.size();
+  outcome.seconds_partition = secondsSince(start);
+  const int num_cells = static_cast<int>(cells.size());
+
+  auto locate = [&](const Eigen::Vector3d& x) {
+    int n = 0;
+    while (nodes[n].plane >= 0) n = planes[nodes[n].plane].signedDistance(x) < 0.0 ? nodes[n].negative : nodes[n].positive;
+    return nodes[n].cell;
+  };
+  auto inBox = [&](const Eigen::Vector3d& x) { return (x.array() > lo.array()).all() && (x.array() < hi.array()).all(); };
+
+  // Data terms, in units of area: each point stands for its primitive's area / point count. The
+  // side its normal points to is empty (outside), the other side is solid (inside).
+  std::vector<double> cost_inside(num_cells, 0.0), cost_outside(num_cells, 0.0);
+  for (int k = 0; k < num_primitives; ++k) {
+    const auto& primitive = primitives[k];
+    if (primitive.points.empty()) continue;
+    const double weight = std::max(extents[k].area, 1e-12) / static_cast<double>(primitive.points.size());
+    const Eigen::Vector3d& n = primitive.plane.normal;
+    for (const auto& p : primitive.points) {
+      const Eigen::Vector3d x = primitive.plane.project(Eigen::Vector3d(p.x, p.y, p.z));
+      const double facing = Eigen::Vector3d(p.normal_x, p.normal_y, p.normal_z).dot(n) >= 0.0 ? 1.0 : -1.0;
+      const Eigen::Vector3d front = x + kVoteOffset * facing * n, back = x - kVoteOffset * facing * n;
+      if (inBox(front)) cost_inside[locate(front)] += weight;
+      if (inBox(back)) cost_outside[locate(back)] += weight;
+    }
+  }
+
+  // Adjacency: faces of different cells on the same plane with opposite sides overlap.
+  struct FaceRef {
+    int cell;
+    const Face* face;
+    std::vector<Vertex2> polygon;  // counter-clockwise in the plane frame
+    Eigen::Vector2d lo, hi;
+  };
+  struct Adjacency {
+    int a, b;  // a: cell whose face has sign +1
+    double area;
+    std::vector<Eigen::Vector3d> polygon;  // counter-clockwise around the plane normal
+    int plane;
+  };
+  std::vector<std::vector<FaceRef>> by_plane(planes.size());
+  for (int c = 0; c < num_cells; ++c)
+    for (const auto& f : cells[c].faces) {
+      const PlaneFrame frame(planes[f.plane]);
+      FaceRef ref{c, &f, {}, Eigen::Vector2d::Constant(1e300), Eigen::Vector2d::Constant(-1e300)};
+      for (const auto& x : f.polygon) {
+        const Eigen::Vector2d p = frame.project(x);
+        ref.polygon.push_back({p, x});
+        ref.lo = ref.lo.cwiseMin(p);
+        ref.hi = ref.hi.cwiseMax(p);
+      }
+      if (f.sign < 0) std::reverse(ref.polygon.begin(), ref.polygon.end());
+      by_plane[f.plane].push_back(std::move(ref));
+    }
+  std::vector<Adjacency> adjacencies;
+  std::vector<double> box_area(num_cells, 0.0);
+  for (int plane = 0; plane < static_cast<int>(planes.size()); ++plane) {
+    auto& refs = by_plane[plane];
+    if (plane >= num_primitives) {
+      for (const auto& r : refs) box_area[r.cell] += polygonArea3d(r.face->polygon);
+      continue;
+    }
+    std::vector<const FaceRef*> up, down;
+    for (const auto& r : refs) (r.face->sign > 0 ? up : down).push_back(&r);
+    std::sort(down.begin(), down.end(), [](const FaceRef* x, const FaceRef* y) { return x->lo.x() < y->lo.x(); });
+    for (const FaceRef* a : up) {
+      for (const FaceRef* b : down) {
+        if (b->lo.x() > a->hi.x()) break;
+        if (b->hi.x() < a->lo.x() || b->lo.y() > a->hi.y() || b->hi.y() < a->lo.y() || a->cell == b->cell) continue;
+        std::vector<Vertex2> overlap = clipConvex(a->polygon, b->polygon);
+        if (overlap.size() < 3) continue;
+        std::vector<Eigen::Vector2d> pts;
+        for (const auto& v : overlap) pts.push_back(v.p);
+        const double area = polygonArea2d(pts);
+        if (area < kMinArea) continue;
+        Adjacency adjacency{a->cell, b->cell, area, {}, plane};
+        for (const auto& v : overlap) adjacency.polygon.push_back(v.x);
+        adjacencies.push_back(std::move(adjacency));
+      }
+    }
+  }
+  outcome.num_candidate_faces = adjacencies.size();
+  if (secondsSince(start) > options.seconds) {
+    outcome.status = AssemblyStatus::TimeLimit;
+    outcome.message = "the cell adjacency did not finish within the time limit";
+    return outcome;
+  }
+
+  // s-t min-cut: source = inside, sink = outside. Cutting s->i labels i outside, paying its inside
+  // votes; cutting i->t labels i inside, paying its outside votes and the box area it would expose.
+  using namespace boost;
+  using Traits = adjacency_list_traits<vecS, vecS, directedS>;
+  using Graph = adjacency_list<
+      vecS, vecS, directedS,
+      property<vertex_index_t, long,
+               property<vertex_color_t, default_color_type,
+                        property<vertex_distance_t, long, property<vertex_predecessor_t, Traits::edge_descriptor>>>>,
+      property<edge_capacity_t, double,
+               property<edge_residual_capacity_t, double, property<edge_reverse_t, Traits::edge_descriptor>>>>;
+  Graph graph(static_cast<std::size_t>(num_cells) + 2);
+  const auto source = static_cast<Traits::vertex_descriptor>(num_cells);
+  const auto sink = static_cast<Traits::vertex_descriptor>(num_cells + 1);
+  auto capacity = get(edge_capacity, graph);
+  auto reverse = get(edge_reverse, graph);
+  auto addEdge = [&](Traits::vertex_descriptor u, Traits::vertex_descriptor v, double forward, double backward) {
+    const auto e = add_edge(u, v, graph).first;
+    const auto r = add_edge(v, u, graph).first;
+    capacity[e] = forward;
+    capacity[r] = backward;
+    reverse[e] = r;
+    reverse[r] = e;
+  };
+  const double beta = options.smoothness;
+  for (int c = 0; c < num_cells; ++c) {
+    addEdge(source, static_cast<Traits::vertex_descriptor>(c), cost_outside[c], 0.0);
+    addEdge(static_cast<Traits::vertex_descriptor>(c), sink, cost_inside[c] + beta * box_area[c], 0.0);
+  }
+  for (const auto& adjacency : adjacencies)
+    addEdge(static_cast<Traits::vertex_descriptor>(adjacency.a), static_cast<Traits::vertex_descriptor>(adjacency.b),
+            beta * adjacency.area, beta * adjacency.area);
+  boykov_kolmogorov_max_flow(graph, source, sink);
+  auto color = get(vertex_color, graph);
+  std::vector<bool> inside(num_cells);
+  int num_inside = 0;
+  for (int c = 0; c < num_cells; ++c) {
+    inside[c] = get(color, static_cast<Traits::vertex_descriptor>(c)) == black_color;
+    num_inside += inside[c];
+  }
+  if (num_inside == 0) {
+    outcome.status = AssemblyStatus::EmptySolution;
+    outcome.message = "the min-cut labelled every cell outside: the points' normals do not describe a solid";
+    return outcome;
+  }
+
+  // The boundary between inside and outside cells (and inside cells against the box).
+  std::vector<OutputPolygon> polygons;
+  for (const auto& adjacency : adjacencies) {
+    if (inside[adjacency.a] == inside[adjacency.b]) continue;
+    OutputPolygon out{adjacency.polygon};
+    if (inside[adjacency.b]) std::reverse(out.polygon.begin(), out.polygon.end());  // outward from b is -normal
+    polygons.push_back(std::move(out));
+  }
+  for (int c = 0; c < num_cells; ++c) {
+    if (!inside[c]) continue;
+    for (const auto& f : cells[c].faces)
+      if (f.plane >= num_primitives) polygons.push_back(OutputPolygon{f.polygon});
+  }
+
+  // Shared corners and no T-junctions; merging into one polygon per plane region follows in
+  // cleanUpPolygonMesh (called by PolygonalAssembler for every backend).
+  for (const auto& p : polygons) {
+    std::vector<std::uint32_t> face;
+    for (const auto& x : p.polygon) {
+      face.push_back(static_cast<std::uint32_t>(mesh.vertices.size()));
+      mesh.vertices.push_back(x);
+    }
+    mesh.faces.push_back(std::move(face));
+  }
+  weldVertices(mesh, kWeldTolerance);
+  insertTJunctionVertices(mesh, 10 * kWeldTolerance);
+  outcome.seconds_solve = secondsSince(start) - outcome.seconds_partition;
+  return outcome;
+}
+
+}  // namespace paco::detail

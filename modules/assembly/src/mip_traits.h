@@ -1,0 +1,249 @@
+#pragma once
+// CGAL MixedIntegerProgramTraits models for COIN-OR CBC (CGAL 5.5 ships none) and for GLPK with a
+// time limit (CGAL's own GLPK traits have none). Private to paco::assembly, included by one .cpp.
+//
+// CGAL's Polygonal_surface_reconstruction::reconstruct() default-constructs its solver, so the
+// options reach it through a thread-local MipSettings, and the outcome comes back the same way.
+#include <CGAL/Mixed_integer_program_traits.h>
+
+#include <Cbc_C_Interface.h>
+#include <glpk.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace paco::detail {
+
+struct MipSettings {
+  double seconds = 60.0;  ///< wall-clock budget of the solve
+  bool verbose = false;   ///< let the solver print its log
+};
+
+struct MipOutcome {
+  bool optimal = false;
+  bool hit_time_limit = false;
+  bool has_solution = false;
+  std::size_t num_variables = 0, num_constraints = 0;
+  std::string message;
+};
+
+inline MipSettings& mipSettings() {
+  thread_local MipSettings settings;
+  return settings;
+}
+inline MipOutcome& mipOutcome() {
+  thread_local MipOutcome outcome;
+  return outcome;
+}
+
+/// The program in compressed-sparse-column form, shared by both adapters.
+template <typename FT>
+struct ColumnProgram {
+  int num_columns = 0, num_rows = 0;
+  std::vector<int> column_start, row_index;
+  std::vector<double> value, column_lower, column_upper, objective, row_lower, row_upper;
+  std::vector<bool> is_integer;
+  bool minimize = true;
+
+  template <typename Traits>
+  explicit ColumnProgram(const Traits& program, double infinity) {
+    using Variable = typename Traits::Variable;
+    using Linear_objective = typename Traits::Linear_objective;
+    const auto& variables = program.variables();
+    const auto& constraints = program.constraints();
+    num_columns = static_cast<int>(variables.size());
+    num_rows = static_cast<int>(constraints.size());
+    auto bound = [&](FT b) {
+      if (b <= -Variable::infinity()) return -infinity;
+      if (b >= Variable::infinity()) return infinity;
+      return static_cast<double>(b);
+    };
+    column_lower.resize(num_columns);
+    column_upper.resize(num_columns);
+    is_integer.resize(num_columns);
+    for (int i = 0; i < num_columns; ++i) {
+      FT lb, ub;
+      variables[i]->get_bounds(lb, ub);
+      is_integer[i] = variables[i]->variable_type() != Variable::CONTINUOUS;
+      if (variables[i]->variable_type() == Variable::BINARY) {
+        lb = 0;
+        ub = 1;
+      }
+      column_lower[i] = bound(lb);
+      column_upper[i] = bound(ub);
+    }
+    // Constraints are stored by row; transpose into columns.
+    std::vector<std::vector<std::pair<int, double>>> columns(num_columns);
+    row_lower.resize(num_rows);
+    row_upper.resize(num_rows);
+    for (int r = 0; r < num_rows; ++r) {
+      for (const auto& [variable, coefficient] : constraints[r]->coefficients())
+        columns[variable->index()].emplace_back(r, static_cast<double>(coefficient));
+      FT lb, ub;
+      constraints[r]->get_bounds(lb, ub);
+      row_lower[r] = bound(lb);
+      row_upper[r] = bound(ub);
+    }
+    column_start.reserve(num_columns + 1);
+    column_start.push_back(0);
+    for (auto& column : columns) {
+      std::sort(column.begin(), column.end());
+      for (const auto& [r, v] : column) {
+        row_index.push_back(r);
+        value.push_back(v);
+      }
+      column_start.push_back(static_cast<int>(row_index.size()));
+    }
+    objective.assign(num_columns, 0.0);
+    for (const auto& [variable, coefficient] : program.objective()->coefficients())
+      objective[variable->index()] = static_cast<double>(coefficient);
+    minimize = program.objective()->sense() == Linear_objective::MINIMIZE;
+  }
+};
+
+/// COIN-OR CBC through its C interface (CbcMain1: presolve, cuts and heuristics as the cbc
+/// executable uses them). Stops at MipSettings::seconds and keeps the best solution found.
+template <typename FT>
+class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_traits<FT> {
+ public:
+  using Base = CGAL::Mixed_integer_program_traits<FT>;
+  using Variable = typename Base::Variable;
+
+  bool solve() override {
+    Base::error_message_.clear();
+    MipOutcome& outcome = mipOutcome();
+    outcome = MipOutcome{};
+    const ColumnProgram<FT> program(*this, DBL_MAX);
+    outcome.num_variables = static_cast<std::size_t>(program.num_columns);
+    outcome.num_constraints = static_cast<std::size_t>(program.num_rows);
+
+    Cbc_Model* model = Cbc_newModel();
+    if (!model) {
+      Base::error_message_ = outcome.message = "CBC: cannot create a model";
+      return false;
+    }
+    const std::vector<CoinBigIndex> column_start(program.column_start.begin(), program.column_start.end());
+    Cbc_loadProblem(model, program.num_columns, program.num_rows, column_start.data(),
+                    program.row_index.data(), program.value.data(), program.column_lower.data(),
+                    program.column_upper.data(), program.objective.data(), program.row_lower.data(),
+                    program.row_upper.data());
+    for (int i = 0; i < program.num_columns; ++i)
+      if (program.is_integer[i]) Cbc_setInteger(model, i);
+    Cbc_setObjSense(model, program.minimize ? 1.0 : -1.0);
+    const MipSettings& settings = mipSettings();
+    Cbc_setMaximumSeconds(model, std::max(0.01, settings.seconds));
+    Cbc_setLogLevel(model, settings.verbose ? 1 : 0);
+    if (!settings.verbose) Cbc_setParameter(model, "log", "0");
+    Cbc_solve(model);
+
+    const double* best = Cbc_bestSolution(model);
+    outcome.optimal = Cbc_isProvenOptimal(model) != 0;
+    outcome.hit_time_limit = Cbc_isSecondsLimitReached(model) != 0 || Cbc_secondaryStatus(model) == 4;
+    bool ok = false;
+    if (best) {
+      outcome.has_solution = true;
+      Base::result_.resize(program.num_columns);
+      for (int i = 0; i < program.num_columns; ++i) {
+        double x = best[i];
+        if (program.is_integer[i]) x = std::round(x);
+        Base::variables_[i]->set_solution_value(x);
+        Base::result_[i] = x;
+      }
+      ok = true;
+    } else if (Cbc_isProvenInfeasible(model)) {
+      outcome.message = "CBC: the binary program is infeasible";
+    } else if (outcome.hit_time_limit) {
+      outcome.message = "CBC found no feasible solution within the time limit of " +
+                        std::to_string(settings.seconds) + " s";
+    } else {
+      outcome.message = "CBC stopped without a solution (status " + std::to_string(Cbc_status(model)) +
+                        ", secondary status " + std::to_string(Cbc_secondaryStatus(model)) + ")";
+    }
+    Base::error_message_ = outcome.message;
+    Cbc_deleteModel(model);
+    return ok;
+  }
+};
+
+/// GLPK's branch-and-cut with a time limit; past it the best integer solution found is kept.
+template <typename FT>
+class Glpk_timed_mixed_integer_program_traits : public CGAL::Mixed_integer_program_traits<FT> {
+ public:
+  using Base = CGAL::Mixed_integer_program_traits<FT>;
+
+  bool solve() override {
+    Base::error_message_.clear();
+    MipOutcome& outcome = mipOutcome();
+    outcome = MipOutcome{};
+    const ColumnProgram<FT> program(*this, DBL_MAX);
+    outcome.num_variables = static_cast<std::size_t>(program.num_columns);
+    outcome.num_constraints = static_cast<std::size_t>(program.num_rows);
+
+    glp_prob* lp = glp_create_prob();
+    glp_set_obj_dir(lp, program.minimize ? GLP_MIN : GLP_MAX);
+    auto bounds_type = [](double lb, double ub) {
+      const bool has_lb = lb > -DBL_MAX, has_ub = ub < DBL_MAX;
+      if (has_lb && has_ub) return lb == ub ? GLP_FX : GLP_DB;
+      if (has_lb) return GLP_LO;
+      if (has_ub) return GLP_UP;
+      return GLP_FR;
+    };
+    if (program.num_columns > 0) glp_add_cols(lp, program.num_columns);
+    if (program.num_rows > 0) glp_add_rows(lp, program.num_rows);
+    for (int r = 0; r < program.num_rows; ++r)
+      glp_set_row_bnds(lp, r + 1, bounds_type(program.row_lower[r], program.row_upper[r]), program.row_lower[r],
+                       program.row_upper[r]);
+    std::vector<int> index(1);
+    std::vector<double> value(1);
+    for (int c = 0; c < program.num_columns; ++c) {
+      glp_set_col_kind(lp, c + 1, program.is_integer[c] ? GLP_IV : GLP_CV);
+      glp_set_col_bnds(lp, c + 1, bounds_type(program.column_lower[c], program.column_upper[c]),
+                       program.column_lower[c], program.column_upper[c]);
+      glp_set_obj_coef(lp, c + 1, program.objective[c]);
+      index.resize(1);
+      value.resize(1);  // GLPK arrays are 1-based
+      for (int k = program.column_start[c]; k < program.column_start[c + 1]; ++k) {
+        index.push_back(program.row_index[k] + 1);
+        value.push_back(program.value[k]);
+      }
+      glp_set_mat_col(lp, c + 1, static_cast<int>(index.size()) - 1, index.data(), value.data());
+    }
+    const MipSettings& settings = mipSettings();
+    glp_iocp parameters;
+    glp_init_iocp(&parameters);
+    parameters.msg_lev = settings.verbose ? GLP_MSG_ON : GLP_MSG_OFF;
+    parameters.presolve = GLP_ON;
+    parameters.tm_lim = static_cast<int>(std::min(2.0e9, std::max(10.0, settings.seconds * 1000.0)));
+    const int code = glp_intopt(lp, &parameters);
+    const int status = glp_mip_status(lp);
+    outcome.hit_time_limit = code == GLP_ETMLIM;
+    outcome.optimal = code == 0 && status == GLP_OPT;
+    bool ok = false;
+    if ((code == 0 || code == GLP_ETMLIM || code == GLP_EMIPGAP) && (status == GLP_OPT || status == GLP_FEAS)) {
+      outcome.has_solution = true;
+      Base::result_.resize(program.num_columns);
+      for (int i = 0; i < program.num_columns; ++i) {
+        double x = glp_mip_col_val(lp, i + 1);
+        if (program.is_integer[i]) x = std::round(x);
+        Base::variables_[i]->set_solution_value(x);
+        Base::result_[i] = x;
+      }
+      ok = true;
+    } else if (code == GLP_ETMLIM) {
+      outcome.message = "GLPK found no feasible solution within the time limit of " +
+                        std::to_string(settings.seconds) + " s (try --solver cbc)";
+    } else if (status == GLP_NOFEAS || code == GLP_ENOPFS) {
+      outcome.message = "GLPK: the binary program is infeasible";
+    } else {
+      outcome.message = "GLPK failed (glp_intopt code " + std::to_string(code) + ")";
+    }
+    Base::error_message_ = outcome.message;
+    glp_delete_prob(lp);
+    return ok;
+  }
+};
+
+}  // namespace paco::detail

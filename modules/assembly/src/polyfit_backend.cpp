@@ -1,0 +1,141 @@
+// The "polyfit" backend: CGAL's Polygonal_surface_reconstruction (Nan & Wonka, PolyFit, ICCV 2017)
+// with COIN-OR CBC or GLPK as the MIP solver. The only translation unit of paco that includes CGAL's
+// reconstruction code (it takes a minute and ~2 GB to compile).
+#include "backends.h"
+#include "mip_traits.h"
+
+#include <paco/common/progress.h>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygonal_surface_reconstruction.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/property_map.h>
+
+#include <Eigen/Geometry>
+
+#include <chrono>
+#include <tuple>
+#include <vector>
+
+namespace paco::detail {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Vector = Kernel::Vector_3;
+using PointWithNormalAndPlane = std::tuple<Point, Vector, int>;
+using PointMap = CGAL::Nth_of_tuple_property_map<0, PointWithNormalAndPlane>;
+using NormalMap = CGAL::Nth_of_tuple_property_map<1, PointWithNormalAndPlane>;
+using PlaneIndexMap = CGAL::Nth_of_tuple_property_map<2, PointWithNormalAndPlane>;
+using Reconstruction = CGAL::Polygonal_surface_reconstruction<Kernel>;
+using CgalMesh = CGAL::Surface_mesh<Point>;
+
+// CGAL 5.5's plane fit returns normals with ~1e-30 components for exactly axis-aligned point sets;
+// its three-plane intersections then depend on argument order and candidate generation runs away
+// (minutes, gigabytes). Turning the input by a fixed generic rotation avoids exact alignment; the
+// result is turned back. The angles are arbitrary but fixed, so results are reproducible.
+Eigen::Matrix3d genericRotation() {
+  return (Eigen::AngleAxisd(0.5373, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(0.4187, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(0.2953, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const PolyFitOptions& options,
+                          SurfaceMesh& mesh) {
+  const auto start = std::chrono::steady_clock::now();
+  BackendOutcome outcome;
+  mesh = SurfaceMesh{};
+  const Eigen::Matrix3d rotation = genericRotation();
+
+  std::vector<PointWithNormalAndPlane> points;
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    for (const auto& p : primitives[k].points) {
+      const Eigen::Vector3d x = rotation * Eigen::Vector3d(p.x, p.y, p.z);
+      const Eigen::Vector3d n = rotation * Eigen::Vector3d(p.normal_x, p.normal_y, p.normal_z);
+      points.emplace_back(Point(x.x(), x.y(), x.z()), Vector(n.x(), n.y(), n.z()), static_cast<int>(k));
+    }
+  }
+
+  // The constructor generates the candidate faces and their confidences (not interruptible).
+  Reconstruction reconstruction(points, PointMap(), NormalMap(), PlaneIndexMap());
+  if (!reconstruction.error_message().empty()) {
+    outcome.status = AssemblyStatus::SolverFailed;
+    outcome.message = "PolyFit candidate generation failed: " + reconstruction.error_message();
+    return outcome;
+  }
+  outcome.seconds_partition = secondsSince(start);
+  if (interruptRequested()) {
+    outcome.status = AssemblyStatus::Interrupted;
+    outcome.message = "interrupted after candidate generation";
+    return outcome;
+  }
+  const double left = options.seconds - secondsSince(start);
+  if (left <= 0.0) {
+    outcome.status = AssemblyStatus::TimeLimit;
+    outcome.message = "PolyFit candidate generation alone took " + std::to_string(secondsSince(start)) +
+                      " s, more than the time limit of " + std::to_string(options.seconds) +
+                      " s; raise it or use the cell-complex backend";
+    return outcome;
+  }
+
+  mipSettings() = MipSettings{left, options.verbose};
+  mipOutcome() = MipOutcome{};
+  CgalMesh result;
+  bool solved = false;
+  if (options.solver == MipSolver::Cbc)
+    solved = reconstruction.reconstruct<Cbc_mixed_integer_program_traits<double>>(
+        result, options.wt_fitting, options.wt_coverage, options.wt_complexity);
+  else
+    solved = reconstruction.reconstruct<Glpk_timed_mixed_integer_program_traits<double>>(
+        result, options.wt_fitting, options.wt_coverage, options.wt_complexity);
+  outcome.seconds_solve = secondsSince(start) - outcome.seconds_partition;
+  const MipOutcome& mip = mipOutcome();
+  outcome.optimal = mip.optimal;
+  outcome.hit_time_limit = mip.hit_time_limit;
+  outcome.num_variables = mip.num_variables;
+  outcome.num_constraints = mip.num_constraints;
+  {
+    CgalMesh candidates;
+    reconstruction.output_candidate_faces(candidates);
+    outcome.num_candidate_faces = candidates.number_of_faces();
+  }
+  if (!solved) {
+    const bool timed_out = mip.hit_time_limit && !mip.has_solution;
+    outcome.status = timed_out ? AssemblyStatus::TimeLimit : AssemblyStatus::SolverFailed;
+    outcome.message = !mip.message.empty() ? mip.message : "PolyFit failed: " + reconstruction.error_message();
+    return outcome;
+  }
+
+  // Surface_mesh indices may have gaps after face removal: renumber the vertices in use.
+  const Eigen::Matrix3d back = rotation.transpose();
+  std::vector<std::int64_t> index_of(result.number_of_vertices() + result.number_of_removed_vertices(), -1);
+  for (auto f : result.faces()) {
+    std::vector<std::uint32_t> face;
+    for (auto v : CGAL::vertices_around_face(result.halfedge(f), result)) {
+      auto& index = index_of[static_cast<std::size_t>(v)];
+      if (index < 0) {
+        const Point& p = result.point(v);
+        index = static_cast<std::int64_t>(mesh.vertices.size());
+        mesh.vertices.push_back(back * Eigen::Vector3d(CGAL::to_double(p.x()), CGAL::to_double(p.y()),
+                                                       CGAL::to_double(p.z())));
+      }
+      face.push_back(static_cast<std::uint32_t>(index));
+    }
+    mesh.faces.push_back(std::move(face));
+  }
+  if (mesh.faces.empty()) {
+    outcome.status = AssemblyStatus::EmptySolution;
+    outcome.message = "PolyFit selected no face (the optimal model is empty); check the primitives' points "
+                      "or lower the complexity weight";
+  }
+  return outcome;
+}
+
+}  // namespace paco::detail

@@ -1,0 +1,401 @@
+#include <paco/assembly/polygonal_assembler.h>
+
+#include "backends.h"
+#include "mesh_cleanup.h"
+
+#include <paco/common/error.h>
+#include <paco/common/normalization.h>
+#include <paco/common/progress.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+namespace paco {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double nowSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+Eigen::Vector3d position(const pcl::PointNormal& p) { return {p.x, p.y, p.z}; }
+
+double meanAbsDistance(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& plane) {
+  if (points.empty()) return 0.0;
+  double sum = 0.0;
+  for (const auto& p : points) sum += std::abs(plane.signedDistance(position(p)));
+  return sum / static_cast<double>(points.size());
+}
+
+Plane refit(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& hint) {
+  std::vector<Eigen::Vector3d> xs;
+  xs.reserve(points.size());
+  for (const auto& p : points) xs.push_back(position(p));
+  try {
+    return Plane::fit(xs, hint.normal);
+  } catch (const Error&) {
+    return hint;  // collinear points: keep the plane we had
+  }
+}
+
+}  // namespace
+
+std::string toString(AssemblyStatus status) {
+  switch (status) {
+    case AssemblyStatus::Success: return "success";
+    case AssemblyStatus::NotRun: return "not-run";
+    case AssemblyStatus::EmptyInput: return "empty-input";
+    case AssemblyStatus::InvalidInput: return "invalid-input";
+    case AssemblyStatus::TooFewPlanes: return "too-few-planes";
+    case AssemblyStatus::DegeneratePlanes: return "degenerate-planes";
+    case AssemblyStatus::EmptySolution: return "empty-solution";
+    case AssemblyStatus::SolverFailed: return "solver-failed";
+    case AssemblyStatus::TimeLimit: return "time-limit";
+    case AssemblyStatus::Interrupted: return "interrupted";
+    case AssemblyStatus::NotWatertight: return "not-watertight";
+  }
+  return "unknown";
+}
+
+AssemblyBackend backendFromString(const std::string& name) {
+  const std::string n = lower(name);
+  if (n == "polyfit") return AssemblyBackend::PolyFit;
+  if (n == "cell-complex" || n == "cellcomplex" || n == "cell_complex") return AssemblyBackend::CellComplex;
+  throw InvalidInputError("unknown assembly backend '" + name + "': use 'polyfit' or 'cell-complex'");
+}
+
+std::string toString(AssemblyBackend backend) {
+  return backend == AssemblyBackend::PolyFit ? "polyfit" : "cell-complex";
+}
+
+MipSolver mipSolverFromString(const std::string& name) {
+  const std::string n = lower(name);
+  if (n == "cbc") return MipSolver::Cbc;
+  if (n == "glpk") return MipSolver::Glpk;
+  throw InvalidInputError("unknown MIP solver '" + name + "': use 'cbc' or 'glpk'");
+}
+
+std::string toString(MipSolver solver) { return solver == MipSolver::Cbc ? "cbc" : "glpk"; }
+
+std::vector<PlanarPrimitive> mergeAndFilterPrimitives(const std::vector<PlanarPrimitive>& primitives,
+                                                      double merge_angle, double merge_distance,
+                                                      std::size_t min_support, std::vector<PrimitiveFate>* fates) {
+  std::vector<PrimitiveFate> local(primitives.size());
+  // Largest first, so that small duplicates join the well-supported plane.
+  std::vector<std::size_t> order(primitives.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return primitives[a].points.size() > primitives[b].points.size(); });
+  std::vector<PlanarPrimitive> kept;
+  std::vector<std::size_t> kept_source;  // input index of each kept primitive
+  for (std::size_t i : order) {
+    const PlanarPrimitive& p = primitives[i];
+    if (p.points.size() < min_support) {
+      local[i].kind = PrimitiveFate::Dropped;
+      local[i].reason = std::to_string(p.points.size()) + " points < minimum support " + std::to_string(min_support);
+      continue;
+    }
+    bool merged = false;
+    if (merge_distance > 0.0) {
+      for (std::size_t k = 0; k < kept.size() && !merged; ++k) {
+        PlanarPrimitive& q = kept[k];
+        const double angle = p.plane.unorientedAngleTo(q.plane);
+        if (angle > merge_angle) continue;
+        const double d_pq = meanAbsDistance(p.points, q.plane), d_qp = meanAbsDistance(q.points, p.plane);
+        if (d_pq > merge_distance || d_qp > merge_distance) continue;
+        std::ostringstream why;
+        why << "angle " << angle * 180.0 / kPi << " deg, mean distance " << std::max(d_pq, d_qp);
+        local[i].kind = PrimitiveFate::MergedInto;
+        local[i].target = kept_source[k];
+        local[i].reason = why.str();
+        q.points += p.points;
+        q.confidence = std::max(q.confidence, p.confidence);
+        q.plane = refit(q.points, q.plane);
+        merged = true;
+      }
+    }
+    if (merged) continue;
+    kept.push_back(p);
+    kept_source.push_back(i);
+  }
+  // Keep the input order among the survivors, so that plane indices are predictable.
+  std::vector<std::size_t> by_input(kept.size());
+  std::iota(by_input.begin(), by_input.end(), 0);
+  std::sort(by_input.begin(), by_input.end(), [&](std::size_t a, std::size_t b) { return kept_source[a] < kept_source[b]; });
+  std::vector<PlanarPrimitive> result;
+  result.reserve(kept.size());
+  for (std::size_t k : by_input) result.push_back(std::move(kept[k]));
+  if (fates) *fates = std::move(local);
+  return result;
+}
+
+PolygonalAssembler::PolygonalAssembler() : merge_angle_(2.0 * kPi / 180.0) {}
+PolygonalAssembler::~PolygonalAssembler() = default;
+
+void PolygonalAssembler::setInputPrimitives(std::vector<PlanarPrimitive> primitives) { input_ = std::move(primitives); }
+
+void PolygonalAssembler::setInputCloud(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                       const PlanarSegmentation& segmentation) {
+  segmentation.validate(cloud.size());
+  input_ = makePrimitives(cloud, segmentation);
+}
+
+namespace {
+void requireNonNegative(double w, const char* what) {
+  if (!(w >= 0.0) || !std::isfinite(w))
+    throw InvalidInputError(std::string("PolygonalAssembler: the ") + what + " weight must be a finite value >= 0");
+}
+}  // namespace
+
+void PolygonalAssembler::setFittingWeight(double w) { requireNonNegative(w, "fitting"), wt_fitting_ = w; }
+void PolygonalAssembler::setCoverageWeight(double w) { requireNonNegative(w, "coverage"), wt_coverage_ = w; }
+void PolygonalAssembler::setComplexityWeight(double w) { requireNonNegative(w, "complexity"), wt_complexity_ = w; }
+
+void PolygonalAssembler::setTimeLimit(double seconds) {
+  if (!(seconds > 0.0)) throw InvalidInputError("PolygonalAssembler: the time limit must be > 0 seconds");
+  time_limit_ = seconds;
+}
+
+void PolygonalAssembler::setMergeAngle(double radians) {
+  if (!(radians >= 0.0 && radians < kPi / 2))
+    throw InvalidInputError("PolygonalAssembler: the merge angle must be in [0, pi/2) radians");
+  merge_angle_ = radians;
+}
+
+void PolygonalAssembler::setMergeDistance(double fraction) {
+  if (!(fraction >= 0.0 && fraction < 1.0))
+    throw InvalidInputError("PolygonalAssembler: the merge distance must be in [0, 1) of the diagonal");
+  merge_distance_ = fraction;
+}
+
+void PolygonalAssembler::setMinSupport(std::size_t points) {
+  if (points < 3) throw InvalidInputError("PolygonalAssembler: the minimum support must be at least 3 points");
+  min_support_ = points;
+}
+
+void PolygonalAssembler::setSmoothness(double beta) {
+  if (!(beta > 0.0) || !std::isfinite(beta))
+    throw InvalidInputError("PolygonalAssembler: the smoothness must be a finite value > 0");
+  smoothness_ = beta;
+}
+
+void PolygonalAssembler::setExtentMargin(double fraction) {
+  if (!(fraction >= 0.0 && fraction <= 1.0))
+    throw InvalidInputError("PolygonalAssembler: the extent margin must be in [0, 1] of the diagonal");
+  extent_margin_ = fraction;
+}
+
+MeshTopology PolygonalAssembler::postProcess(SurfaceMesh& mesh) {
+  // CGAL's output repeats vertices, and the cell complex computes shared corners more than once.
+  weldVertices(mesh, 1e-7);
+  detail::orientConsistently(mesh);
+  if (signedVolume(mesh) < 0.0) flipFaces(mesh);
+  detail::cleanUpPolygonMesh(mesh);
+  return analyseTopology(mesh);
+}
+
+double PolygonalAssembler::secondsLeft() const { return time_limit_ - (nowSeconds() - start_time_); }
+
+void PolygonalAssembler::fail(AssemblyStatus status, const std::string& message) {
+  result_.status = status;
+  result_.message = message;
+}
+
+bool PolygonalAssembler::initCompute() {
+  result_.num_input_planes = input_.size();
+  if (input_.empty()) {
+    fail(AssemblyStatus::EmptyInput, "no primitives: set them with setInputPrimitives() (at least 4 planes)");
+    return false;
+  }
+  std::size_t total_points = 0;
+  for (std::size_t k = 0; k < input_.size(); ++k) {
+    const Plane& plane = input_[k].plane;
+    if (!plane.normal.allFinite() || !std::isfinite(plane.offset) || std::abs(plane.normal.norm() - 1.0) > 1e-6) {
+      fail(AssemblyStatus::InvalidInput, "primitive " + std::to_string(k) + " has a non-finite or non-unit plane normal");
+      return false;
+    }
+    for (const auto& p : input_[k].points)
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        fail(AssemblyStatus::InvalidInput, "primitive " + std::to_string(k) + " has a point with non-finite "
+                                           "coordinates: remove NaN/Inf points first");
+        return false;
+      }
+    total_points += input_[k].points.size();
+  }
+  if (total_points == 0) {
+    fail(AssemblyStatus::EmptyInput, "the " + std::to_string(input_.size()) + " primitives have no inlier points");
+    return false;
+  }
+
+  // Points without normals take their plane's; non-finite normals likewise.
+  std::vector<PlanarPrimitive> primitives = input_;
+  std::vector<Eigen::Vector3d> all_points;
+  all_points.reserve(total_points);
+  for (auto& primitive : primitives)
+    for (auto& p : primitive.points) {
+      Eigen::Vector3f n(p.normal_x, p.normal_y, p.normal_z);
+      if (!n.allFinite() || n.norm() < 0.5) {
+        p.normal_x = static_cast<float>(primitive.plane.normal.x());
+        p.normal_y = static_cast<float>(primitive.plane.normal.y());
+        p.normal_z = static_cast<float>(primitive.plane.normal.z());
+      }
+      all_points.push_back(position(p));
+    }
+  Eigen::Vector3d lo = all_points.front(), hi = all_points.front();
+  for (const auto& x : all_points) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  const double diagonal = (hi - lo).norm();
+  if (!(diagonal > 0.0)) {
+    fail(AssemblyStatus::InvalidInput, "all inlier points coincide: the primitives have no extent");
+    return false;
+  }
+
+  used_ = mergeAndFilterPrimitives(primitives, merge_angle_, merge_distance_ * diagonal, min_support_, &result_.fates);
+  result_.num_planes_used = used_.size();
+  for (const auto& fate : result_.fates) {
+    result_.num_merged += fate.kind == PrimitiveFate::MergedInto;
+    result_.num_dropped += fate.kind == PrimitiveFate::Dropped;
+  }
+  if (used_.size() < 4) {
+    std::ostringstream message;
+    message << "at least 4 planes are needed to enclose a volume; " << used_.size() << " left of " << input_.size();
+    if (result_.num_merged || result_.num_dropped)
+      message << " (" << result_.num_merged << " merged as near-duplicates, " << result_.num_dropped
+              << " dropped for fewer than " << min_support_ << " points)";
+    fail(AssemblyStatus::TooFewPlanes, message.str());
+    return false;
+  }
+  // A closed volume needs normals in three independent directions.
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& p : used_) scatter += p.plane.normal * p.plane.normal.transpose();
+  const Eigen::Vector3d eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvalues();
+  const double tiny = 1e-6 * eigenvalues(2);
+  if (eigenvalues(1) < tiny) {
+    fail(AssemblyStatus::DegeneratePlanes,
+         "all " + std::to_string(used_.size()) + " planes are parallel: they cannot enclose a volume");
+    return false;
+  }
+  if (eigenvalues(0) < tiny) {
+    fail(AssemblyStatus::DegeneratePlanes, "all " + std::to_string(used_.size()) +
+                                               " planes are parallel to one direction (their normals lie in one "
+                                               "plane): they cannot enclose a volume");
+    return false;
+  }
+  return true;
+}
+
+void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh) {
+  detail::BackendOutcome outcome;
+  if (backend_ == AssemblyBackend::PolyFit) {
+    detail::PolyFitOptions options;
+    options.solver = solver_;
+    options.wt_fitting = wt_fitting_;
+    options.wt_coverage = wt_coverage_;
+    options.wt_complexity = wt_complexity_;
+    options.seconds = secondsLeft();
+    options.verbose = verbose_;
+    outcome = detail::runPolyFit(primitives, options, mesh);
+  } else {
+    // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
+    // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x).
+    detail::CellComplexOptions options;
+    options.smoothness = smoothness_;
+    for (double factor : {1.0, 2.0, 4.0}) {
+      options.extent_margin = extent_margin_ * factor;
+      options.seconds = secondsLeft();
+      SurfaceMesh attempt;
+      detail::BackendOutcome attempt_outcome = detail::runCellComplex(primitives, options, attempt);
+      const bool first = factor == 1.0;
+      if (attempt_outcome.status != AssemblyStatus::Success) {
+        if (first) outcome = attempt_outcome, mesh = std::move(attempt);
+        break;
+      }
+      SurfaceMesh check = attempt;
+      const bool watertight = postProcess(check).isClosedManifold();
+      if (first || watertight) outcome = attempt_outcome, mesh = std::move(attempt);
+      if (watertight || extent_margin_ == 0.0 || secondsLeft() <= 0.0) break;
+    }
+  }
+  result_.solution_is_optimal = outcome.optimal;
+  result_.hit_time_limit = outcome.hit_time_limit;
+  result_.num_candidate_faces = outcome.num_candidate_faces;
+  result_.seconds_partition = outcome.seconds_partition;
+  result_.seconds_solve = outcome.seconds_solve;
+  result_.num_cells = outcome.num_cells;
+  result_.num_variables = outcome.num_variables;
+  result_.num_constraints = outcome.num_constraints;
+  if (outcome.status != AssemblyStatus::Success) fail(outcome.status, outcome.message);
+}
+
+const AssemblyResult& PolygonalAssembler::reconstruct(SurfaceMesh& mesh) {
+  start_time_ = nowSeconds();
+  result_ = AssemblyResult{};
+  result_.status = AssemblyStatus::Success;
+  used_.clear();
+  mesh = SurfaceMesh{};
+  auto finish = [&]() -> const AssemblyResult& {
+    result_.seconds = nowSeconds() - start_time_;
+    return result_;
+  };
+  if (!initCompute()) return finish();
+  if (!(wt_fitting_ + wt_coverage_ + wt_complexity_ > 0.0)) {
+    fail(AssemblyStatus::InvalidInput, "the fitting, coverage and complexity weights are all 0");
+    return finish();
+  }
+
+  // Work at unit diagonal so that tolerances mean the same for every input unit.
+  std::vector<Eigen::Vector3d> all_points;
+  for (const auto& p : used_)
+    for (const auto& q : p.points) all_points.push_back(position(q));
+  const Normalization normalization = Normalization::fromBoundingBox(all_points);
+  std::vector<PlanarPrimitive> normalised = used_;
+  normalization.apply(normalised);
+
+  SurfaceMesh work;
+  performReconstruction(normalised, work);
+  if (result_.status == AssemblyStatus::Success && interruptRequested())
+    fail(AssemblyStatus::Interrupted, "interrupted by the user");
+  if (result_.status != AssemblyStatus::Success) return finish();
+  if (work.faces.empty()) {
+    fail(AssemblyStatus::EmptySolution, "the " + toString(backend_) + " backend produced no face");
+    return finish();
+  }
+
+  result_.topology = postProcess(work);
+  normalization.applyInverse(work);
+  mesh = std::move(work);
+  if (mesh.faces.empty()) {
+    fail(AssemblyStatus::EmptySolution, "every face of the " + toString(backend_) + " result was degenerate");
+  } else if (!result_.topology.isClosedManifold()) {
+    fail(AssemblyStatus::NotWatertight,
+         "the " + toString(backend_) + " result is not a closed oriented manifold: " + result_.topology.describe());
+  } else if (!(signedVolume(mesh) > 0.0)) {
+    fail(AssemblyStatus::EmptySolution, "the " + toString(backend_) + " result encloses no volume");
+  }
+  if (result_.status != AssemblyStatus::Success && result_.status != AssemblyStatus::NotWatertight) mesh = SurfaceMesh{};
+  return finish();
+}
+
+const AssemblyResult& PolygonalAssembler::reconstruct(pcl::PolygonMesh& mesh) {
+  SurfaceMesh surface;
+  reconstruct(surface);
+  mesh = toPolygonMesh(surface);
+  return result_;
+}
+
+}  // namespace paco

@@ -1,0 +1,79 @@
+#include "shape_primitives.h"
+
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numeric>
+
+namespace paco::test {
+
+double diagonalOf(const paco::SurfaceMesh& mesh) {
+  Eigen::Vector3d lo, hi;
+  paco::boundingBox(mesh, lo, hi);
+  return (hi - lo).norm();
+}
+
+// The distinct planes of a mesh's faces (coplanar faces grouped), outward oriented.
+std::vector<paco::Plane> facePlanes(const paco::SurfaceMesh& mesh, std::vector<int>* face_plane, double angle_cosine,
+                                    double offset_fraction) {
+  std::vector<paco::Plane> planes;
+  const double tol = offset_fraction * diagonalOf(mesh);
+  if (face_plane) face_plane->assign(mesh.faces.size(), -1);
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Eigen::Vector3d n = paco::faceNormal(mesh, f);
+    const paco::Plane plane = paco::Plane::fromPointAndNormal(mesh.vertices[mesh.faces[f][0]], n);
+    int found = -1;
+    for (std::size_t k = 0; k < planes.size() && found < 0; ++k)
+      if (planes[k].normal.dot(n) > angle_cosine && std::abs(planes[k].offset - plane.offset) < tol) found = static_cast<int>(k);
+    if (found < 0) {
+      found = static_cast<int>(planes.size());
+      planes.push_back(plane);
+    }
+    if (face_plane) (*face_plane)[f] = found;
+  }
+  return planes;
+}
+
+// Exact primitives of a shape: points sampled on its faces, grouped by face plane.
+std::vector<paco::PlanarPrimitive> primitivesOf(const paco::SurfaceMesh& mesh, std::size_t samples, double angle_cosine,
+                                               double offset_fraction) {
+  std::vector<int> face_plane;
+  const auto planes = facePlanes(mesh, &face_plane, angle_cosine, offset_fraction);
+  const paco::SurfaceSample sample = paco::sampleSurface(mesh, samples, 7);
+  std::vector<paco::PlanarPrimitive> primitives(planes.size());
+  for (std::size_t k = 0; k < planes.size(); ++k) primitives[k].plane = planes[k];
+  for (std::size_t i = 0; i < sample.points.size(); ++i) {
+    pcl::PointNormal p;
+    p.x = static_cast<float>(sample.points[i].x());
+    p.y = static_cast<float>(sample.points[i].y());
+    p.z = static_cast<float>(sample.points[i].z());
+    p.normal_x = static_cast<float>(sample.normals[i].x());
+    p.normal_y = static_cast<float>(sample.normals[i].y());
+    p.normal_z = static_cast<float>(sample.normals[i].z());
+    primitives[face_plane[sample.faces[i]]].points.push_back(p);
+  }
+  return primitives;
+}
+
+// Planar faces after merging edge-adjacent coplanar polygons.
+std::size_t countPlanarRegions(const paco::SurfaceMesh& mesh) {
+  std::vector<int> face_plane;
+  facePlanes(mesh, &face_plane);
+  std::vector<std::size_t> parent(mesh.faces.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  std::function<std::size_t(std::size_t)> find = [&](std::size_t x) { return parent[x] == x ? x : parent[x] = find(parent[x]); };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::size_t>> edges;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    for (std::size_t i = 0; i < mesh.faces[f].size(); ++i) {
+      std::uint32_t a = mesh.faces[f][i], b = mesh.faces[f][(i + 1) % mesh.faces[f].size()];
+      edges[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  for (const auto& [e, fs] : edges)
+    for (std::size_t i = 1; i < fs.size(); ++i)
+      if (face_plane[fs[i]] == face_plane[fs[0]]) parent[find(fs[i])] = find(fs[0]);
+  std::size_t regions = 0;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) regions += find(f) == f;
+  return regions;
+}
+
+}  // namespace paco::test

@@ -1,0 +1,92 @@
+// Runs the built paco_assemble tool: a good input gives a closed mesh, bad inputs exit non-zero
+// and leave no file behind.
+#include <paco/io/cloud_io.h>
+#include <paco/io/mesh_io.h>
+#include <paco/io/vertex_groups_io.h>
+
+#include "shape_primitives.h"
+#include "shapes.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace {
+
+using paco::test::TempDir;
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+std::string tool() { return paco::test::toolPath("paco_assemble"); }
+bool toolBuilt() { return std::filesystem::exists(tool()); }
+
+TEST(PacoAssemble, AssemblesVertexGroupsWithBothBackends) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_assemble is not built";
+  TempDir dir;
+  const paco::SurfaceMesh truth = paco::test::makeLBracket();
+  paco::io::saveVertexGroups(dir.file("bracket.bvg"), paco::io::toVertexGroups(paco::test::primitivesOf(truth)));
+  for (const std::string backend : {"polyfit", "cell-complex"}) {
+    SCOPED_TRACE(backend);
+    const std::string mesh_path = dir.file("bracket_" + backend + ".obj");
+    std::string out;
+    const int rc = paco::test::runCommand(tool() + " " + quoted(dir.file("bracket.bvg")) + " -o " + quoted(mesh_path) +
+                                              " --backend " + backend, &out);
+    ASSERT_EQ(rc, 0) << out;
+    EXPECT_NE(out.find("closed"), std::string::npos) << out;
+    EXPECT_NE(out.find("8 planes used"), std::string::npos) << out;
+    const paco::SurfaceMesh mesh = paco::io::loadMesh(mesh_path);
+    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+    EXPECT_NEAR(paco::signedVolume(mesh), paco::signedVolume(truth), 0.01 * paco::signedVolume(truth));
+  }
+}
+
+TEST(PacoAssemble, AssemblesALabelledCloud) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_assemble is not built";
+  TempDir dir;
+  const auto primitives = paco::test::primitivesOf(paco::test::makeChamferedCube());
+  paco::io::LabelledCloud cloud;
+  paco::flattenPrimitives(primitives, cloud.points, cloud.labels);
+  for (auto& label : cloud.labels) label += 100;  // labels need not start at 0
+  cloud.has_normals = true;
+  paco::io::saveCloud(dir.file("cube.ply"), cloud);
+  std::string out;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("cube.ply")) + " -o " + quoted(dir.file("cube.off")) +
+                                       " --backend cell-complex", &out), 0) << out;
+  EXPECT_NE(out.find("7 planes used"), std::string::npos) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("cube.off")));
+}
+
+TEST(PacoAssemble, FailsCleanlyWithoutPartialOutput) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_assemble is not built";
+  TempDir dir;
+  auto primitives = paco::test::primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  primitives.resize(3);
+  paco::io::saveVertexGroups(dir.file("three.vg"), paco::io::toVertexGroups(primitives));
+  std::string out;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("three.vg")) + " -o " + quoted(dir.file("m.obj")), &out), 1);
+  EXPECT_NE(out.find("too-few-planes"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.obj")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.partial.obj")));
+
+  paco::io::LabelledCloud unlabelled;
+  unlabelled.points.resize(10);
+  paco::io::saveCloud(dir.file("plain.pcd"), unlabelled);
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("plain.pcd")) + " -o " + quoted(dir.file("m.obj")), &out), 1);
+  EXPECT_NE(out.find("no per-point plane labels"), std::string::npos) << out;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("missing.vg")) + " -o " + quoted(dir.file("m.obj")), &out), 1);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.obj")));
+}
+
+TEST(PacoAssemble, UsageErrorsAndHelp) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_assemble is not built";
+  std::string out;
+  EXPECT_EQ(paco::test::runCommand(tool() + " --help", &out), 0);
+  EXPECT_NE(out.find("--backend"), std::string::npos) << out;
+  EXPECT_NE(out.find("--time-limit"), std::string::npos) << out;
+  EXPECT_EQ(paco::test::runCommand(tool() + " in.vg", &out), 2);
+  EXPECT_EQ(paco::test::runCommand(tool() + " in.vg -o out.obj --backend ksr", &out), 2);
+  EXPECT_NE(out.find("unknown assembly backend"), std::string::npos) << out;
+  EXPECT_EQ(paco::test::runCommand(tool() + " in.vg -o out.stl", &out), 2);
+}
+
+}  // namespace

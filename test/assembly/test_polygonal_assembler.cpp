@@ -1,0 +1,323 @@
+// PolygonalAssembler on exact primitives of generated shapes: both backends must return closed,
+// manifold, outward meshes with the right planar faces, volume and vertex positions; bad inputs
+// must fail with the right status.
+#include <paco/assembly/polygonal_assembler.h>
+#include <paco/common/error.h>
+
+#include "shape_primitives.h"
+#include "shapes.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <string>
+
+namespace {
+
+using paco::test::diagonalOf;
+using paco::test::facePlanes;
+using paco::test::primitivesOf;
+using paco::test::countPlanarRegions;
+using paco::AssemblyStatus;
+using paco::PlanarPrimitive;
+using paco::SurfaceMesh;
+
+struct Shape {
+  std::string name;
+  SurfaceMesh mesh;
+  std::size_t planar_faces;
+};
+
+std::vector<Shape> shapes() {
+  return {{"box", paco::test::makeBox({0, 0, 0}, {1.0, 0.7, 0.4}), 6},
+          {"lbracket", paco::test::makeLBracket(), 8},
+          {"boss_on_slab", paco::test::makeBossOnSlab(), 11},
+          {"chamfered_cube", paco::test::makeChamferedCube(), 7}};
+}
+
+Eigen::Matrix3d someRotation() {
+  return (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 0.5).normalized()) *
+          Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitZ()))
+      .toRotationMatrix();
+}
+
+void expectGoodReconstruction(const SurfaceMesh& truth, std::size_t planar_faces, const std::string& backend,
+                              const std::string& solver = "cbc") {
+  const auto primitives = primitivesOf(truth);
+  paco::PolygonalAssembler assembler;
+  assembler.setInputPrimitives(primitives);
+  assembler.setBackend(backend);
+  assembler.setMipSolver(solver);
+  assembler.setTimeLimit(30);
+  SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+  const paco::MeshTopology topology = paco::analyseTopology(mesh);
+  EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
+  EXPECT_EQ(topology.components, 1u);
+  EXPECT_EQ(countPlanarRegions(mesh), planar_faces);
+  const double volume = paco::signedVolume(truth);
+  EXPECT_NEAR(paco::signedVolume(mesh), volume, 0.01 * volume);
+  // Each face lies on one of the true planes, and every vertex of it within 1e-6 of the diagonal.
+  const double tolerance = 1e-6 * diagonalOf(truth);
+  const auto true_planes = facePlanes(truth);
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Eigen::Vector3d n = paco::faceNormal(mesh, f);
+    const paco::Plane* match = nullptr;
+    for (const auto& plane : true_planes)
+      if (plane.normal.dot(n) > 0.999 && std::abs(plane.signedDistance(mesh.vertices[mesh.faces[f][0]])) < 1e-3)
+        match = &plane;
+    ASSERT_NE(match, nullptr) << "face " << f << " lies on no true plane";
+    for (auto v : mesh.faces[f]) EXPECT_LT(std::abs(match->signedDistance(mesh.vertices[v])), tolerance);
+  }
+}
+
+class AssemblyOnShapes : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(AssemblyOnShapes, AxisAlignedShapesAreReconstructedExactly) {
+  for (const auto& shape : shapes()) {
+    SCOPED_TRACE(shape.name);
+    expectGoodReconstruction(shape.mesh, shape.planar_faces, GetParam());
+  }
+}
+
+TEST_P(AssemblyOnShapes, RotatedScaledShapesAreReconstructedInTheirOwnFrame) {
+  for (auto shape : shapes()) {
+    SCOPED_TRACE(shape.name);
+    for (auto& v : shape.mesh.vertices) v *= 25.0;  // millimetres, say
+    paco::test::transformMesh(shape.mesh, someRotation(), Eigen::Vector3d(100, -40, 7));
+    expectGoodReconstruction(shape.mesh, shape.planar_faces, GetParam());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, AssemblyOnShapes, ::testing::Values("polyfit", "cell-complex"),
+                         [](const auto& info) { return info.param == "polyfit" ? "polyfit" : "cell_complex"; });
+
+TEST(PolyFit, GlpkSolvesASmallProgram) {
+  expectGoodReconstruction(paco::test::makeLBracket(), 8, "polyfit", "glpk");
+}
+
+TEST(PolyFit, ReportsTheSizeOfTheProgram) {
+  paco::PolygonalAssembler assembler;
+  assembler.setInputPrimitives(primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1})));
+  SurfaceMesh mesh;
+  const auto& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << result.message;
+  EXPECT_TRUE(result.solution_is_optimal);
+  EXPECT_GT(result.num_variables, 0u);
+  EXPECT_GT(result.num_constraints, 0u);
+  EXPECT_GE(result.num_candidate_faces, 6u);
+  EXPECT_EQ(mesh.faces.size(), 6u);
+}
+
+TEST(CellComplex, BoxGivesSixQuads) {
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend("cell-complex");
+  assembler.setInputPrimitives(primitivesOf(paco::test::makeBox({0, 0, 0}, {2, 1, 1})));
+  SurfaceMesh mesh;
+  const auto& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << result.message;
+  EXPECT_GE(result.num_cells, 7u);  // the box and at least one cell around it
+  ASSERT_EQ(mesh.faces.size(), 6u);
+  EXPECT_EQ(mesh.vertices.size(), 8u);
+  for (const auto& f : mesh.faces) EXPECT_EQ(f.size(), 4u);
+  EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 1e-9);
+}
+
+TEST(Assembler, PolygonMeshOutputAndCloudInputAgree) {
+  const SurfaceMesh truth = paco::test::makeChamferedCube();
+  const auto primitives = primitivesOf(truth);
+  pcl::PointCloud<pcl::PointNormal> cloud;
+  paco::PlanarSegmentation segmentation;
+  std::vector<int> labels;
+  paco::flattenPrimitives(primitives, cloud, labels);
+  segmentation.labels = labels;
+  for (const auto& p : primitives) segmentation.planes.push_back(p.plane);
+  segmentation.rebuildSegmentsFromLabels();
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend(paco::AssemblyBackend::CellComplex);
+  assembler.setInputCloud(cloud, segmentation);
+  pcl::PolygonMesh polygon_mesh;
+  ASSERT_TRUE(assembler.reconstruct(polygon_mesh).ok()) << assembler.getResult().message;
+  const SurfaceMesh mesh = paco::fromPolygonMesh(polygon_mesh);
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  EXPECT_NEAR(paco::signedVolume(mesh), paco::signedVolume(truth), 0.01 * paco::signedVolume(truth));
+}
+
+// --- pre-processing -------------------------------------------------------------------------
+
+TEST(Preprocessing, MergesNearDuplicatePlanesAndDropsWeakPrimitives) {
+  auto primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  // A near-duplicate of primitive 0 (tilted by 0.5 degrees, shifted by 0.001) and a 5-point scrap.
+  PlanarPrimitive duplicate = primitives[0];
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.5 * M_PI / 180, duplicate.plane.normal.unitOrthogonal()).toRotationMatrix();
+  duplicate.plane = paco::Plane(tilt * duplicate.plane.normal, duplicate.plane.offset + 0.001);
+  for (auto& p : duplicate.points) p.getVector3fMap() += 0.001f * duplicate.plane.normal.cast<float>();
+  PlanarPrimitive scrap;
+  scrap.plane = paco::Plane(Eigen::Vector3d(1, 1, 0).normalized(), -0.5);
+  for (int i = 0; i < 5; ++i) {
+    pcl::PointNormal p;
+    p.getVector3fMap() = Eigen::Vector3f(0.5f - 0.05f * i, 0.2f + 0.05f * i, 0.5f);
+    p.getNormalVector3fMap() = scrap.plane.normal.cast<float>();
+    scrap.points.push_back(p);
+  }
+  primitives.push_back(duplicate);
+  primitives.push_back(scrap);
+
+  std::vector<paco::PrimitiveFate> fates;
+  const auto kept = paco::mergeAndFilterPrimitives(primitives, 2 * M_PI / 180, 0.005 * std::sqrt(3.0), 10, &fates);
+  ASSERT_EQ(kept.size(), 6u);
+  ASSERT_EQ(fates.size(), 8u);
+  EXPECT_EQ(fates[6].kind, paco::PrimitiveFate::MergedInto);
+  EXPECT_EQ(fates[6].target, 0u);
+  EXPECT_EQ(fates[7].kind, paco::PrimitiveFate::Dropped);
+  EXPECT_NE(fates[7].reason.find("5 points"), std::string::npos);
+  for (std::size_t k = 0; k < 6; ++k) EXPECT_EQ(fates[k].kind, paco::PrimitiveFate::Kept);
+  EXPECT_EQ(kept[0].points.size(), primitives[0].points.size() + duplicate.points.size());
+
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend("cell-complex");
+  assembler.setInputPrimitives(primitives);
+  SurfaceMesh mesh;
+  const auto& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << result.message;
+  EXPECT_EQ(result.num_merged, 1u);
+  EXPECT_EQ(result.num_dropped, 1u);
+  EXPECT_EQ(result.num_planes_used, 6u);
+  EXPECT_EQ(countPlanarRegions(mesh), 6u);
+}
+
+// --- failures --------------------------------------------------------------------------------
+
+class AssemblyFailures : public ::testing::TestWithParam<std::string> {
+ protected:
+  AssemblyStatus run(const std::vector<PlanarPrimitive>& primitives, std::string* message = nullptr) {
+    paco::PolygonalAssembler assembler;
+    assembler.setBackend(GetParam());
+    assembler.setInputPrimitives(primitives);
+    SurfaceMesh mesh;
+    mesh.vertices.emplace_back(0, 0, 0);  // must be cleared on failure
+    const auto& result = assembler.reconstruct(mesh);
+    EXPECT_TRUE(mesh.empty());
+    EXPECT_TRUE(mesh.vertices.empty());
+    EXPECT_FALSE(result.message.empty());
+    if (message) *message = result.message;
+    return result.status;
+  }
+};
+
+TEST_P(AssemblyFailures, EmptyInput) {
+  EXPECT_EQ(run({}), AssemblyStatus::EmptyInput);
+  std::vector<PlanarPrimitive> no_points(5);
+  EXPECT_EQ(run(no_points), AssemblyStatus::EmptyInput);
+}
+
+TEST_P(AssemblyFailures, ThreePlanes) {
+  auto primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  primitives.resize(3);
+  std::string message;
+  EXPECT_EQ(run(primitives, &message), AssemblyStatus::TooFewPlanes);
+  EXPECT_NE(message.find("4 planes"), std::string::npos) << message;
+}
+
+TEST_P(AssemblyFailures, ParallelPlanes) {
+  std::vector<PlanarPrimitive> primitives;
+  for (int i = 0; i < 5; ++i) {
+    PlanarPrimitive p;
+    p.plane = paco::Plane(Eigen::Vector3d::UnitZ(), -0.25 * i);
+    for (int j = 0; j < 50; ++j) {
+      pcl::PointNormal q;
+      q.getVector3fMap() = Eigen::Vector3f(0.02f * j, static_cast<float>((j * 7) % 11) / 11.0f, 0.25f * i);
+      q.getNormalVector3fMap() = Eigen::Vector3f::UnitZ();
+      p.points.push_back(q);
+    }
+    primitives.push_back(p);
+  }
+  std::string message;
+  EXPECT_EQ(run(primitives, &message), AssemblyStatus::DegeneratePlanes);
+  EXPECT_NE(message.find("parallel"), std::string::npos) << message;
+}
+
+TEST_P(AssemblyFailures, PlanesOfAnOpenPrism) {
+  // The four sides of a box, no top or bottom: every normal is horizontal.
+  auto primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  std::vector<PlanarPrimitive> sides;
+  for (const auto& p : primitives)
+    if (std::abs(p.plane.normal.z()) < 0.5) sides.push_back(p);
+  ASSERT_EQ(sides.size(), 4u);
+  EXPECT_EQ(run(sides), AssemblyStatus::DegeneratePlanes);
+}
+
+TEST_P(AssemblyFailures, NonFinitePoint) {
+  auto primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  primitives[2].points[3].x = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(run(primitives), AssemblyStatus::InvalidInput);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, AssemblyFailures, ::testing::Values("polyfit", "cell-complex"),
+                         [](const auto& info) { return info.param == "polyfit" ? "polyfit" : "cell_complex"; });
+
+TEST(Assembler, RejectsBadParameters) {
+  paco::PolygonalAssembler assembler;
+  EXPECT_THROW(assembler.setBackend("ksr"), paco::InvalidInputError);
+  EXPECT_THROW(assembler.setMipSolver("scip"), paco::InvalidInputError);
+  EXPECT_THROW(assembler.setFittingWeight(-1), paco::InvalidInputError);
+  EXPECT_THROW(assembler.setTimeLimit(0), paco::InvalidInputError);
+  EXPECT_THROW(assembler.setMinSupport(2), paco::InvalidInputError);
+  EXPECT_THROW(assembler.setSmoothness(0), paco::InvalidInputError);
+  EXPECT_EQ(assembler.getResult().status, AssemblyStatus::NotRun);
+}
+
+// A subclass can replace the backend; reconstruct() still validates, orients and un-normalises.
+class InvertedBoxAssembler : public paco::PolygonalAssembler {
+ protected:
+  void performReconstruction(const std::vector<PlanarPrimitive>&, SurfaceMesh& mesh) override {
+    mesh = paco::test::makeBox({-0.1, -0.1, -0.1}, {0.1, 0.1, 0.1});
+    paco::flipFaces(mesh);  // inward: the base class must turn it outward
+  }
+};
+
+TEST(Assembler, SubclassBackendIsOrientedAndMappedBack) {
+  InvertedBoxAssembler assembler;
+  assembler.setInputPrimitives(primitivesOf(paco::test::makeBox({10, 10, 10}, {20, 20, 20})));
+  SurfaceMesh mesh;
+  ASSERT_TRUE(assembler.reconstruct(mesh).ok()) << assembler.getResult().message;
+  EXPECT_GT(paco::signedVolume(mesh), 0.0);
+  Eigen::Vector3d lo, hi;
+  paco::boundingBox(mesh, lo, hi);
+  EXPECT_NEAR(lo.x(), 15 - 0.1 * 10 * std::sqrt(3.0), 1e-6);  // normalised diagonal 1 -> 10 sqrt(3)
+}
+
+// Two cubes sharing only an edge: after welding, that edge has four faces. The clean-up must
+// separate the two solids (duplicate the edge's vertices) so that the result is manifold.
+class EdgeTouchingCubesAssembler : public paco::PolygonalAssembler {
+ protected:
+  void performReconstruction(const std::vector<PlanarPrimitive>&, SurfaceMesh& mesh) override {
+    mesh = paco::test::makeBox({-0.2, -0.2, -0.1}, {0.0, 0.0, 0.1});
+    const SurfaceMesh other = paco::test::makeBox({0.0, 0.0, -0.1}, {0.2, 0.2, 0.1});
+    const auto offset = static_cast<std::uint32_t>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), other.vertices.begin(), other.vertices.end());
+    for (auto face : other.faces) {
+      for (auto& v : face) v += offset;
+      mesh.faces.push_back(face);
+    }
+  }
+};
+
+TEST(Assembler, SolidsTouchingAlongAnEdgeAreSeparated) {
+  EdgeTouchingCubesAssembler assembler;
+  assembler.setInputPrimitives(primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1})));
+  SurfaceMesh mesh;
+  ASSERT_TRUE(assembler.reconstruct(mesh).ok()) << assembler.getResult().message;
+  const paco::MeshTopology topology = paco::analyseTopology(mesh);
+  EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
+  EXPECT_EQ(topology.components, 2u);
+  EXPECT_EQ(mesh.faces.size(), 12u);
+  EXPECT_EQ(mesh.vertices.size(), 16u);  // 14 distinct positions, the shared edge's 2 doubled
+}
+
+}  // namespace
