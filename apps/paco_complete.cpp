@@ -1,0 +1,223 @@
+// paco_complete: stages 1-3 of the pipeline. Segments an incomplete point cloud, encodes its
+// planes (stage 2) and completes them (stage 3); writes the completed planar primitives.
+//   paco_complete scan.ply -o primitives.vg
+//   paco_complete scan.pcd -o primitives.bvg --pcd coloured.pcd --model my_model.pt --threshold 0.5
+//   paco_complete labelled.pcd -o primitives.vg --use-labels     # skip segmentation
+#include <torch/torch.h>  // before anything that may pull Qt headers (Qt's `slots` breaks LibTorch)
+
+#include "app_support.h"
+
+#include <paco/common/error.h>
+#include <paco/common/progress.h>
+#include <paco/completion/parametric_completer.h>
+#include <paco/encoding/completion_model.h>
+#include <paco/encoding/plane_proxy_encoder.h>
+#include <paco/io/cloud_io.h>
+#include <paco/io/vertex_groups_io.h>
+#include <paco/segmentation/segmentation.h>
+
+#include <boost/program_options.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace po = boost::program_options;
+
+namespace {
+
+const char kTool[] = "paco_complete";
+
+// File-scope defaults, shown by --help.
+struct Options {
+  std::string input, output, pcd, model;
+  std::string segmenter = "gocopp";
+  double epsilon = 0.004;
+  double threshold = 0.7;
+  int threads = 0;
+  int points = 2048;
+  bool use_labels = false;
+  bool drop_non_finite = false;
+};
+
+void printHelp(const po::options_description& visible) {
+  std::cout
+      << "Usage: " << kTool << " INPUT -o PRIMITIVES.vg [--pcd COLOURED.pcd] [--model FILE] [options]\n\n"
+      << "Completes the planar primitives of an incomplete point cloud of a piecewise-planar object\n"
+      << "(.pcd .ply .xyz .npy .vg .bvg): segments it into planes (--segmenter; or takes the file's\n"
+      << "labels with --use-labels), encodes the planes with the learned model and predicts every\n"
+      << "plane of the complete surface with points on it. Writes the primitives whose confidence\n"
+      << "exceeds --threshold as PolyFit/Easy3D vertex groups (.vg ascii, .bvg binary; the\n"
+      << "confidence is in each group's label) and, with --pcd, their points with a colour and a\n"
+      << "label per primitive. Results are in the input's frame and units. Stops before assembly:\n"
+      << "paco_assemble (or paco_reconstruct for all stages) makes the mesh.\n\n"
+      << visible << std::endl;
+}
+
+// A colour per primitive from a fixed palette of 12, packed 0xRRGGBB.
+std::uint32_t paletteColour(std::size_t i) {
+  static const std::uint32_t palette[] = {0xe6194b, 0x3cb44b, 0xffe119, 0x4363d8, 0xf58231, 0x911eb4,
+                                          0x46f0f0, 0xf032e6, 0xbcf60c, 0xfabebe, 0x008080, 0x9a6324};
+  return palette[i % (sizeof(palette) / sizeof(palette[0]))];
+}
+
+int run(int argc, char** argv) {
+  Options o;
+  po::options_description visible("Options");
+  visible.add_options()
+      ("help,h", "print this help")
+      ("output,o", po::value(&o.output), "completed primitives to write (.vg or .bvg)")
+      ("pcd", po::value(&o.pcd), "also write the primitives' points, coloured and labelled (.pcd)")
+      ("model", po::value(&o.model), "model file (default: the shipped model, or $PACO_MODEL)")
+      ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "gocopp, region-growing, ransac or efficient-ransac")
+      ("epsilon,e", po::value(&o.epsilon)->default_value(o.epsilon, "0.004"), "segmentation inlier distance, fraction of the bounding-box diagonal")
+      ("use-labels", po::bool_switch(&o.use_labels), "use the input file's labels as the segmentation (no segmenter)")
+      ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.7"), "keep primitives with confidence above this, in [0, 1]")
+      ("points", po::value(&o.points)->default_value(o.points), "points fed to the network (the training size)")
+      ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch threads (0: one per hardware thread)")
+      ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
+  po::options_description all;
+  all.add(visible).add_options()("input", po::value(&o.input));
+  po::positional_options_description positional;
+  positional.add("input", 1);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  if (vm.count("help")) {
+    printHelp(visible);
+    return 0;
+  }
+  if (o.input.empty()) throw paco::app::UsageError("expected an INPUT point cloud");
+  if (o.output.empty()) throw paco::app::UsageError("expected -o PRIMITIVES.vg");
+  const std::string ext = paco::io::extensionOf(o.output);
+  if (ext != ".vg" && ext != ".bvg")
+    throw paco::app::UsageError("-o must name a .vg or .bvg file, got '" + o.output + "'");
+  if (!o.pcd.empty() && paco::io::extensionOf(o.pcd) != ".pcd")
+    throw paco::app::UsageError("--pcd must name a .pcd file, got '" + o.pcd + "'");
+  if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
+    throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
+  if (o.threads < 0) throw paco::app::UsageError("--threads must be >= 0");
+
+  // Check everything that can be checked before the slow work: names, model file, input file.
+  paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
+  if (!o.use_labels) {
+    try {
+      segmenter = paco::makePlanarSegmenter<pcl::PointNormal>(o.segmenter);
+      segmenter->setDistanceThreshold(o.epsilon);
+    } catch (const paco::InvalidInputError& e) {
+      throw paco::app::UsageError(e.what());
+    }
+  }
+  if (o.model.empty()) o.model = paco::CompletionModel::findShippedModel();
+  if (o.model.empty())
+    throw paco::ModelError("no model file found: pass --model FILE (train one with paco_train) or "
+                           "set PACO_MODEL");
+  paco::app::StageTimer timer;
+  if (o.threads > 0) paco::CompletionModel::setThreads(o.threads);
+  timer.start("load model");
+  const auto model = paco::CompletionModel::load(o.model);
+  timer.stop();
+  std::printf("model '%s': preset %s, %.2f M parameters\n", o.model.c_str(),
+              model->config().name.c_str(), model->parameterCount() / 1e6);
+
+  paco::InterruptGuard interrupt_guard;
+  timer.start("read");
+  paco::io::CloudReadOptions read;
+  if (o.drop_non_finite) read.non_finite = paco::io::NonFinitePolicy::Drop;
+  paco::io::LabelledCloud scan = paco::io::loadCloud(o.input, read);
+  timer.stop();
+  if (scan.points.empty()) throw paco::InvalidInputError("'" + o.input + "' holds no points");
+  std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
+              scan.has_normals ? ", with normals" : "");
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
+
+  paco::PlanarSegmentation segmentation;
+  timer.start("segment");
+  if (o.use_labels) {
+    if (!scan.hasLabels())
+      throw paco::InvalidInputError("'" + o.input + "' has no labels; drop --use-labels to segment it");
+    int max_label = -1;
+    for (int label : scan.labels) max_label = std::max(max_label, label);
+    segmentation.labels = scan.labels;
+    segmentation.planes.resize(static_cast<std::size_t>(max_label + 1));
+    segmentation.rebuildSegmentsFromLabels();
+    for (std::size_t s = 0; s < segmentation.segments.size(); ++s) {
+      std::vector<Eigen::Vector3d> members;
+      for (int i : segmentation.segments[s].indices)
+        members.push_back(cloud->points[static_cast<std::size_t>(i)].getVector3fMap().cast<double>());
+      if (members.size() < 3)
+        throw paco::InvalidInputError("'" + o.input + "': label " + std::to_string(s) +
+                                      " has fewer than 3 points; relabel or drop --use-labels");
+      segmentation.planes[s] = paco::Plane::fit(members);
+    }
+  } else {
+    segmenter->setInputCloud(cloud);
+    segmenter->segment(segmentation);
+  }
+  timer.stop();
+  std::printf("segment (%s): %zu planes, coverage %.1f %%\n",
+              o.use_labels ? "input labels" : o.segmenter.c_str(), segmentation.size(),
+              100.0 * segmentation.coverage());
+  if (segmentation.empty())
+    throw paco::InvalidInputError("'" + o.input +
+                                  "': no planar segment found; is it a piecewise-planar object?");
+  if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
+
+  timer.start("encode");
+  paco::PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(cloud);
+  encoder.setSegmentation(segmentation);
+  encoder.setNumPoints(o.points);
+  paco::PlaneProxies proxies;
+  encoder.encode(proxies);
+  timer.stop();
+  timer.start("complete");
+  paco::ParametricCompleter completer;
+  completer.setModel(model);
+  completer.setConfidenceThreshold(o.threshold);
+  completer.setInputProxies(proxies);
+  std::vector<paco::PlanarPrimitive> primitives;
+  completer.complete(primitives);
+  timer.stop();
+  std::printf("complete: %zu primitives with confidence > %.2f\n", primitives.size(), o.threshold);
+  if (primitives.empty())
+    std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
+                 kTool);
+  if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
+
+  // Outputs appear only together and only when complete.
+  timer.start("write");
+  paco::app::PendingOutput vg_out(o.output);
+  std::unique_ptr<paco::app::PendingOutput> pcd_out;
+  if (!o.pcd.empty()) pcd_out = std::make_unique<paco::app::PendingOutput>(o.pcd);
+  paco::io::saveVertexGroups(vg_out.writePath(), paco::io::toVertexGroups(primitives));
+  if (pcd_out) {
+    paco::io::LabelledCloud coloured;
+    coloured.has_normals = true;
+    for (std::size_t i = 0; i < primitives.size(); ++i)
+      for (const auto& p : primitives[i].points) {
+        coloured.points.push_back(p);
+        coloured.labels.push_back(static_cast<int>(i));
+        coloured.colours.push_back(paletteColour(i));
+      }
+    paco::io::saveCloud(pcd_out->writePath(), coloured);
+  }
+  vg_out.commit();
+  if (pcd_out) pcd_out->commit();
+  timer.stop();
+  std::printf("wrote '%s'%s%s\n", o.output.c_str(), o.pcd.empty() ? "" : " and ", o.pcd.c_str());
+  timer.print();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return paco::app::runTool(kTool, [&] { return run(argc, argv); });
+}

@@ -1,0 +1,200 @@
+// paco_train: trains the PaCo network (plane proxy encoder + parametric completer) on a dataset
+// written by paco_dataset, with checkpoints, validation every epoch and a CSV log of the curves.
+//   paco_train data/mfcad -o runs/cpu --preset cpu --epochs 50 --threads 2
+//   paco_train data/mfcad -o runs/cpu --resume            # continue after Ctrl-C
+#include "app_support.h"
+
+#include <torch/torch.h>  // before PCL-using headers (see doc/training.md)
+
+#include <paco/common/blas.h>
+#include <paco/common/error.h>
+#include <paco/common/progress.h>
+#include <paco/completion/trainer.h>
+#include <paco/data/dataset.h>
+#include <paco/encoding/model_config.h>
+
+#include <boost/program_options.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char kTool[] = "paco_train";
+
+struct Options {
+  std::string dataset, output;
+  std::string preset = "cpu";
+  std::string config_file;
+  int epochs = 100;
+  int batch = 16;
+  double lr = 1e-4;
+  int threads = 2;
+  std::size_t limit_train = 0, limit_val = 0;
+  bool resume = false;
+  std::uint64_t seed = 1;
+  std::vector<std::string> disabled_losses;
+  std::string input_frame = "complete";
+  double augment_scale = 0.0, augment_offset = 0.0;
+  int input_points = 2048, gt_points = 8192;
+  int prefetch = 3;
+  bool quiet = false;
+};
+
+void printHelp(const po::options_description& visible) {
+  std::cout << "Usage: " << kTool << " DATASET_DIR -o CHECKPOINT_DIR [options]\n\n"
+            << "Trains the PaCo network on a dataset folder written by paco_dataset. Writes\n"
+            << "CHECKPOINT_DIR/last.pt (every epoch, and on Ctrl-C), CHECKPOINT_DIR/best.pt (lowest\n"
+            << "validation loss) and CHECKPOINT_DIR/training_log.csv (one row per epoch). Ctrl-C saves\n"
+            << "the state and stops; run again with --resume to continue exactly where it stopped.\n"
+            << "Loss terms (for --disable-loss): classification, normal, offset, plane_chamfer,\n"
+            << "overall_chamfer, repulsion, ranking. See doc/training.md.\n\n"
+            << visible << std::endl;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw paco::IoError("cannot read the model configuration '" + path + "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string formatValue(double v) {
+  if (!std::isfinite(v)) return "-";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.4g", v);
+  return buffer;
+}
+
+int run(int argc, char** argv) {
+  Options o;
+  po::options_description visible("Options");
+  visible.add_options()
+      ("help,h", "print this help")
+      ("output,o", po::value(&o.output), "checkpoint folder (created)")
+      ("preset", po::value(&o.preset)->default_value(o.preset), "network size: cpu or paper")
+      ("config", po::value(&o.config_file), "ModelConfig JSON file (overrides --preset)")
+      ("epochs", po::value(&o.epochs)->default_value(o.epochs), "train until this many epochs are done")
+      ("batch", po::value(&o.batch)->default_value(o.batch), "samples per step")
+      ("lr", po::value(&o.lr)->default_value(o.lr), "base learning rate (AdamW); schedule max(0.9^(epoch/21), 0.02)")
+      ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch intra-op threads")
+      ("limit-train", po::value(&o.limit_train), "use at most N training samples (evenly spaced; 0 = all)")
+      ("limit-val", po::value(&o.limit_val), "use at most N validation samples (0 = all)")
+      ("resume", po::bool_switch(&o.resume), "continue the run in CHECKPOINT_DIR (last.pt)")
+      ("seed", po::value(&o.seed)->default_value(o.seed), "seed of weight init, data order and re-sampling")
+      ("disable-loss", po::value(&o.disabled_losses)->multitoken(), "switch loss terms off (ablations)")
+      ("input-frame", po::value(&o.input_frame)->default_value(o.input_frame),
+       "complete: the dataset's complete-shape frame (paper); own: re-normalise each input by its own box")
+      ("augment-scale", po::value(&o.augment_scale)->default_value(o.augment_scale),
+       "random frame scale in [1-s, 1+s] for training samples (0 = off)")
+      ("augment-offset", po::value(&o.augment_offset)->default_value(o.augment_offset),
+       "random frame shift in [-t, t]^3 for training samples (0 = off)")
+      ("input-points", po::value(&o.input_points)->default_value(o.input_points), "points per input cloud")
+      ("gt-points", po::value(&o.gt_points)->default_value(o.gt_points), "GT points per sample")
+      ("prefetch", po::value(&o.prefetch)->default_value(o.prefetch), "batches loaded ahead by the background thread")
+      ("quiet", po::bool_switch(&o.quiet), "no progress bars");
+  po::options_description all;
+  all.add(visible).add_options()("dataset", po::value(&o.dataset));
+  po::positional_options_description positional;
+  positional.add("dataset", 1);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  if (vm.count("help")) {
+    printHelp(visible);
+    return 0;
+  }
+  if (o.dataset.empty()) throw paco::app::UsageError("expected DATASET_DIR (a folder written by paco_dataset)");
+  if (o.output.empty()) throw paco::app::UsageError("expected -o CHECKPOINT_DIR");
+  if (o.threads < 1) throw paco::app::UsageError("--threads must be >= 1");
+  if (o.input_frame != "complete" && o.input_frame != "own")
+    throw paco::app::UsageError("--input-frame must be 'complete' or 'own'");
+  if (o.augment_scale < 0.0 || o.augment_scale >= 1.0 || o.augment_offset < 0.0)
+    throw paco::app::UsageError("--augment-scale must be in [0, 1) and --augment-offset >= 0");
+  const fs::path last = fs::path(o.output) / "last.pt";
+  if (o.resume && !fs::exists(last))
+    throw paco::app::UsageError("--resume: '" + last.string() + "' does not exist; start without --resume");
+  if (!o.resume && fs::exists(last))
+    throw paco::app::UsageError("'" + o.output + "' already holds a run (last.pt); pass --resume to continue it "
+                                "or choose another folder");
+
+  torch::set_num_threads(o.threads);
+  paco::warnIfSlowBlas();
+
+  paco::completion::TrainerOptions options;
+  if (!o.config_file.empty()) options.model = paco::ModelConfig::fromJson(readFile(o.config_file));
+  else options.model = paco::ModelConfig::preset(o.preset);
+  options.model.validate();
+  for (const auto& name : o.disabled_losses) options.loss.disable(name);
+  options.epochs = o.epochs;
+  options.batch_size = o.batch;
+  options.learning_rate = o.lr;
+  options.seed = o.seed;
+  options.prefetch = o.prefetch;
+  options.checkpoint_dir = o.output;
+  options.show_progress = !o.quiet;
+
+  auto dataset = std::make_shared<const paco::data::Dataset>(o.dataset);
+  paco::completion::CollateOptions collate;
+  collate.input_points = o.input_points;
+  collate.gt_points = o.gt_points;
+  collate.input_frame = o.input_frame;
+  paco::completion::CollateOptions train_collate = collate;
+  train_collate.augment_scale = o.augment_scale;
+  train_collate.augment_offset = o.augment_offset;
+  const auto train = paco::completion::datasetSource(dataset, paco::data::Split::Train, train_collate, o.limit_train);
+  const auto val = paco::completion::datasetSource(dataset, paco::data::Split::Val, collate, o.limit_val);
+  if (train.size == 0)
+    throw paco::InvalidInputError("dataset '" + o.dataset + "' has no training samples; build a larger one with paco_dataset");
+
+  paco::completion::Trainer trainer(options);
+  if (o.resume) {
+    if (vm.count("config") || !vm["preset"].defaulted())
+      std::printf("note: --resume uses the network configuration stored in last.pt; --preset/--config ignored\n");
+    trainer.resume(last.string());
+    std::printf("resumed '%s': epoch %d, step %lld\n", last.string().c_str(), trainer.epoch(),
+                static_cast<long long>(trainer.globalStep()));
+  }
+  std::int64_t parameters = 0;
+  for (const auto& p : trainer.network()->parameters()) parameters += p.numel();
+  std::printf("dataset '%s': %zu training, %zu validation samples\n", o.dataset.c_str(), train.size, val.size);
+  std::printf("network '%s': %.2f M parameters; batch %d, lr %g, %d threads, input frame %s\n",
+              trainer.options().model.name.c_str(), parameters / 1e6, trainer.options().batch_size, o.lr, o.threads,
+              o.input_frame.c_str());
+
+  paco::InterruptGuard guard;
+  const auto records = trainer.fit(train, val);
+  for (const auto& r : records)
+    std::printf("epoch %d: step %lld, lr %.3g, train loss %s, val loss %s, val recall %s, NC_prim %s, %.1f samples/s\n",
+                r.epoch, static_cast<long long>(r.step), r.learning_rate, formatValue(r.train_loss).c_str(),
+                formatValue(r.val_loss).c_str(), formatValue(r.val_metrics.recall).c_str(),
+                formatValue(r.val_metrics.nc_prim).c_str(), r.samples_per_second);
+  if (trainer.interrupted()) {
+    std::printf("interrupted: state saved to '%s' (epoch %d, step %lld); continue with --resume\n",
+                last.string().c_str(), trainer.epoch(), static_cast<long long>(trainer.globalStep()));
+    return 130;
+  }
+  std::printf("done: %d epochs, %lld steps; checkpoints in '%s'\n", trainer.epoch(),
+              static_cast<long long>(trainer.globalStep()), o.output.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return paco::app::runTool(kTool, [&] { return run(argc, argv); });
+}

@@ -1,0 +1,135 @@
+#include <paco/common/error.h>
+#include <paco/encoding/model_file.h>
+
+#include <filesystem>
+#include <map>
+#include <unistd.h>
+
+namespace paco {
+namespace {
+
+std::string quoted(const std::string& path) { return "'" + path + "'"; }
+
+// LibTorch messages carry C++ backtraces; keep the first line, which says what went wrong.
+std::string firstLine(const c10::Error& e) {
+  std::string message = e.what_without_backtrace();
+  const auto newline = message.find('\n');
+  if (newline != std::string::npos) message.resize(newline);
+  return message;
+}
+
+}  // namespace
+
+ModelFile readModelFile(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty())
+    throw ModelError("no model file given: pass --model FILE or set PACO_MODEL to a model "
+                     "written by paco_train");
+  if (!fs::is_regular_file(path, ec))
+    throw ModelError("model file " + quoted(path) +
+                     " does not exist or is not a file: give the path of a model written by "
+                     "paco_train (or set PACO_MODEL)");
+  ModelFile file;
+  file.path = path;
+  torch::serialize::InputArchive archive;
+  try {
+    archive.load_from(path);
+  } catch (const c10::Error& e) {
+    throw ModelError("model file " + quoted(path) +
+                     " is corrupt or truncated (cannot be read as a LibTorch archive: " +
+                     firstLine(e) + "): download or train it again");
+  }
+  c10::IValue value;
+  if (!archive.try_read("format_version", value) || !value.isInt())
+    throw ModelError("model file " + quoted(path) +
+                     " has no paco format version: it was not written by paco_train (or by "
+                     "paco::saveCheckpoint); use a paco model file");
+  file.format_version = static_cast<int>(value.toInt());
+  if (file.format_version != kModelFormatVersion)
+    throw ModelError("model file " + quoted(path) + " was written by format v" +
+                     std::to_string(file.format_version) + "; this build reads v" +
+                     std::to_string(kModelFormatVersion) +
+                     ": retrain it with this build's paco_train, or use a paco build of the "
+                     "same format");
+  if (!archive.try_read("config", value) || !value.isString())
+    throw ModelError("model file " + quoted(path) +
+                     " has no model configuration: the file is damaged; train it again");
+  try {
+    file.config = ModelConfig::fromJson(value.toStringRef());
+    file.config.validate();
+  } catch (const InvalidInputError& e) {
+    throw ModelError("model file " + quoted(path) + " has an invalid configuration (" +
+                     e.what() + "): the file is damaged; train it again");
+  }
+  if (archive.try_read("parameter_count", value) && value.isInt())
+    file.parameter_count = value.toInt();
+  file.model = std::make_shared<torch::serialize::InputArchive>();
+  try {
+    if (!archive.try_read("model", *file.model))
+      throw ModelError("model file " + quoted(path) +
+                       " holds no network weights: the file is damaged; train it again");
+    auto state = std::make_shared<torch::serialize::InputArchive>();
+    if (archive.try_read("training_state", *state)) file.training_state = state;
+  } catch (const c10::Error& e) {
+    throw ModelError("model file " + quoted(path) + " is corrupt (" + firstLine(e) +
+                     "): download or train it again");
+  }
+  return file;
+}
+
+void writeModelFile(const std::string& path, const ModelConfig& config,
+                    torch::serialize::OutputArchive& model, std::int64_t parameter_count,
+                    torch::serialize::OutputArchive* training_state) {
+  config.validate();
+  torch::serialize::OutputArchive root;
+  root.write("format_version", c10::IValue(static_cast<int64_t>(kModelFormatVersion)));
+  root.write("config", c10::IValue(config.toJson()));
+  root.write("parameter_count", c10::IValue(static_cast<int64_t>(parameter_count)));
+  root.write("model", model);
+  if (training_state) root.write("training_state", *training_state);
+  // Write beside the target and rename, so a crash or Ctrl-C never leaves a truncated model.
+  const std::string temporary = path + ".partial." + std::to_string(::getpid());
+  try {
+    root.save_to(temporary);
+  } catch (const c10::Error& e) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw IoError("cannot write model file " + quoted(path) + ": " + firstLine(e) +
+                  " (check that the folder exists and is writable)");
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) {
+    std::filesystem::remove(temporary, ec);
+    throw IoError("cannot write model file " + quoted(path) + ": " + ec.message());
+  }
+}
+
+void loadModuleWeights(torch::nn::Module& module, torch::serialize::InputArchive& archive,
+                       const std::string& path, const std::string& what) {
+  // InputArchive replaces tensors whatever their shape, so the shapes are checked here.
+  std::map<std::string, std::vector<int64_t>> expected;
+  for (const auto& item : module.named_parameters()) expected[item.key()] = item.value().sizes().vec();
+  for (const auto& item : module.named_buffers()) expected[item.key()] = item.value().sizes().vec();
+  try {
+    module.load(archive);
+  } catch (const c10::Error& e) {
+    throw ModelError("model file " + quoted(path) + ": the " + what +
+                     " weights do not match its configuration (" + firstLine(e) +
+                     "): the file is damaged or was written by another network version; "
+                     "train it again");
+  }
+  auto check = [&](const std::string& name, const torch::Tensor& t) {
+    auto it = expected.find(name);
+    if (it != expected.end() && t.sizes().vec() != it->second)
+      throw ModelError("model file " + quoted(path) + ": the " + what + " tensor '" + name +
+                       "' has shape " + c10::str(t.sizes()) + " but its configuration needs " +
+                       c10::str(c10::IntArrayRef(it->second)) +
+                       ": the file is damaged or was edited; train it again");
+  };
+  for (const auto& item : module.named_parameters()) check(item.key(), item.value());
+  for (const auto& item : module.named_buffers()) check(item.key(), item.value());
+}
+
+}  // namespace paco

@@ -1,0 +1,159 @@
+#include "test_network_support.h"
+#include "test_support.h"
+
+#include <paco/common/error.h>
+#include <paco/completion/checkpoint.h>
+#include <paco/encoding/completion_model.h>
+
+#include <gtest/gtest.h>
+
+namespace paco {
+namespace {
+
+using test::boxBatch;
+using test::tinyModelConfig;
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const ModelError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    return std::string("WRONG TYPE: ") + e.what();
+  }
+  return "NO ERROR";
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(Checkpoint, LoadedModelGivesIdenticalOutputs) {
+  test::TempDir dir;
+  torch::manual_seed(1);
+  PacoNetwork net(tinyModelConfig("polar"));
+  net->eval();
+  saveCheckpoint(dir.file("model.pt"), net);
+  auto loaded = loadCheckpoint(dir.file("model.pt"));
+  EXPECT_EQ(loaded.config, net->config());
+  EXPECT_EQ(loaded.format_version, kCheckpointFormatVersion);
+  EXPECT_FALSE(loaded.training_state);
+  torch::NoGradGuard no_grad;
+  const auto input = boxBatch(2, 300);
+  const auto a = net->forward(input), b = loaded.network->forward(input);
+  EXPECT_TRUE(a.points.equal(b.points));
+  EXPECT_TRUE(a.normals.equal(b.normals));
+  EXPECT_TRUE(a.offsets.equal(b.offsets));
+  EXPECT_TRUE(a.logits.equal(b.logits));
+  EXPECT_TRUE(a.candidate_scores.equal(b.candidate_scores));
+  EXPECT_TRUE(a.selected.equal(b.selected));
+}
+
+TEST(Checkpoint, TrainingStateRoundTrips) {
+  test::TempDir dir;
+  PacoNetwork net(tinyModelConfig());
+  torch::serialize::OutputArchive state;
+  state.write("epoch", c10::IValue(static_cast<int64_t>(17)));
+  state.write("moments", torch::arange(5));
+  saveCheckpoint(dir.file("model.pt"), net, &state);
+  const auto loaded = loadCheckpoint(dir.file("model.pt"), tinyModelConfig());
+  ASSERT_TRUE(loaded.training_state);
+  c10::IValue epoch;
+  loaded.training_state->read("epoch", epoch);
+  EXPECT_EQ(epoch.toInt(), 17);
+  torch::Tensor moments;
+  loaded.training_state->read("moments", moments);
+  EXPECT_TRUE(moments.equal(torch::arange(5)));
+}
+
+TEST(Checkpoint, MissingFileIsAModelError) {
+  test::TempDir dir;
+  const auto message = errorOf([&] { loadCheckpoint(dir.file("nope.pt")); });
+  EXPECT_TRUE(contains(message, "does not exist")) << message;
+  EXPECT_TRUE(contains(message, "nope.pt")) << message;
+}
+
+TEST(Checkpoint, CorruptFileIsAModelError) {
+  test::TempDir dir;
+  test::writeBytes(dir.file("junk.pt"), "this is not a LibTorch archive at all\n");
+  const auto message = errorOf([&] { loadCheckpoint(dir.file("junk.pt")); });
+  EXPECT_TRUE(contains(message, "corrupt")) << message;
+  EXPECT_TRUE(contains(message, "junk.pt")) << message;
+  const auto model_message = errorOf([&] { CompletionModel::load(dir.file("junk.pt")); });
+  EXPECT_TRUE(contains(model_message, "corrupt")) << model_message;
+}
+
+TEST(Checkpoint, TruncatedFileIsAModelError) {
+  test::TempDir dir;
+  PacoNetwork net(tinyModelConfig());
+  saveCheckpoint(dir.file("model.pt"), net);
+  const std::string bytes = test::readBytes(dir.file("model.pt"));
+  for (double fraction : {0.5, 0.9}) {
+    test::writeBytes(dir.file("cut.pt"), bytes.substr(0, static_cast<std::size_t>(bytes.size() * fraction)));
+    const auto message = errorOf([&] { loadCheckpoint(dir.file("cut.pt")); });
+    EXPECT_TRUE(contains(message, "cut.pt")) << message;
+    EXPECT_FALSE(contains(message, "WRONG TYPE") || contains(message, "NO ERROR")) << message;
+  }
+}
+
+TEST(Checkpoint, OtherFormatVersionIsAModelErrorNamingBoth) {
+  test::TempDir dir;
+  torch::serialize::OutputArchive archive;
+  archive.write("format_version", c10::IValue(static_cast<int64_t>(kCheckpointFormatVersion + 1)));
+  archive.write("config", c10::IValue(tinyModelConfig().toJson()));
+  archive.save_to(dir.file("future.pt"));
+  const auto message = errorOf([&] { loadCheckpoint(dir.file("future.pt")); });
+  const std::string expected = "was written by format v" +
+                               std::to_string(kCheckpointFormatVersion + 1) + "; this build reads v" +
+                               std::to_string(kCheckpointFormatVersion);
+  EXPECT_TRUE(contains(message, expected)) << message;
+}
+
+TEST(Checkpoint, FileWithoutVersionIsAModelError) {
+  test::TempDir dir;
+  torch::serialize::OutputArchive archive;
+  archive.write("weights", torch::ones({3}));
+  archive.save_to(dir.file("foreign.pt"));
+  const auto message = errorOf([&] { loadCheckpoint(dir.file("foreign.pt")); });
+  EXPECT_TRUE(contains(message, "no paco format version")) << message;
+}
+
+TEST(Checkpoint, MismatchedConfigIsAModelErrorNamingTheField) {
+  test::TempDir dir;
+  PacoNetwork net(tinyModelConfig());
+  saveCheckpoint(dir.file("model.pt"), net);
+  ModelConfig other = tinyModelConfig();
+  other.decoder_depth = 3;
+  const auto message = errorOf([&] { loadCheckpoint(dir.file("model.pt"), other); });
+  EXPECT_TRUE(contains(message, "decoder_depth")) << message;
+}
+
+TEST(Checkpoint, WeightsThatDoNotFitTheirConfigAreAModelError) {
+  test::TempDir dir;
+  // Weights of a wider network stored under the tiny config.
+  ModelConfig wide = tinyModelConfig();
+  wide.width = 48;
+  PacoNetwork net(wide);
+  torch::serialize::OutputArchive model;
+  net->save(model);
+  writeModelFile(dir.file("mixed.pt"), tinyModelConfig(), model, parameterCount(*net));
+  const auto message = errorOf([&] { loadCheckpoint(dir.file("mixed.pt")); });
+  EXPECT_TRUE(contains(message, "shape")) << message;
+  // A file whose weights miss a layer.
+  ModelConfig deeper = tinyModelConfig();
+  deeper.decoder_depth = 3;
+  torch::serialize::OutputArchive shallow;
+  net = PacoNetwork(tinyModelConfig());
+  net->save(shallow);
+  writeModelFile(dir.file("shallow.pt"), deeper, shallow, 0);
+  const auto missing = errorOf([&] { loadCheckpoint(dir.file("shallow.pt")); });
+  EXPECT_TRUE(contains(missing, "do not match")) << missing;
+}
+
+TEST(Checkpoint, UnwritableFolderIsAnIoError) {
+  PacoNetwork net(tinyModelConfig());
+  EXPECT_THROW(saveCheckpoint("/nonexistent-folder/model.pt", net), IoError);
+}
+
+}  // namespace
+}  // namespace paco

@@ -1,0 +1,280 @@
+#include "shapes.h"
+#include "test_network_support.h"
+#include "test_support.h"
+
+#include <paco/common/error.h>
+#include <paco/common/normalization.h>
+#include <paco/completion/checkpoint.h>
+#include <paco/completion/parametric_completer.h>
+#include <paco/encoding/completion_model.h>
+#include <paco/encoding/plane_proxy_encoder.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <numeric>
+
+namespace paco {
+namespace {
+
+// A 4 x 2 x 1 box far from the origin (user units), sampled with 2,048 points, segmented by face.
+struct SegmentedBox {
+  pcl::PointCloud<pcl::PointNormal>::Ptr cloud{new pcl::PointCloud<pcl::PointNormal>};
+  PlanarSegmentation segmentation;
+  SegmentedBox() {
+    SurfaceMesh box = test::makeBox({10, -5, 3}, {14, -3, 4});
+    const auto sample = sampleSurface(box, 2048, 7);
+    for (std::size_t f = 0; f < box.faces.size(); ++f)
+      segmentation.planes.push_back(
+          Plane::fromPointAndNormal(box.vertices[box.faces[f][0]], faceNormal(box, f)));
+    for (std::size_t i = 0; i < sample.points.size(); ++i) {
+      pcl::PointNormal p;
+      p.x = float(sample.points[i].x()), p.y = float(sample.points[i].y()), p.z = float(sample.points[i].z());
+      p.normal_x = float(sample.normals[i].x()), p.normal_y = float(sample.normals[i].y());
+      p.normal_z = float(sample.normals[i].z());
+      cloud->push_back(p);
+      segmentation.labels.push_back(int(sample.faces[i]));
+    }
+    segmentation.rebuildSegmentsFromLabels();
+  }
+};
+
+class PublicApi : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    torch::manual_seed(2);
+    PacoNetwork net(test::tinyModelConfig());
+    saveCheckpoint(dir.file("tiny.pt"), net);
+    model = CompletionModel::load(dir.file("tiny.pt"));
+  }
+  test::TempDir dir;
+  CompletionModel::ConstPtr model;
+  SegmentedBox box;
+};
+
+TEST_F(PublicApi, CompletionModelReportsItsConfig) {
+  EXPECT_EQ(model->config(), test::tinyModelConfig());
+  EXPECT_EQ(model->path(), dir.file("tiny.pt"));
+  EXPECT_EQ(model->parameterCount(), parameterCount(*PacoNetwork(test::tinyModelConfig())));
+}
+
+TEST_F(PublicApi, EncoderFillsTheProxies) {
+  PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(box.cloud);
+  encoder.setSegmentation(box.segmentation);
+  PlaneProxies proxies;
+  encoder.encode(proxies);
+  const auto& c = model->config();
+  EXPECT_EQ(proxies.slots, c.plane_slots);
+  EXPECT_EQ(proxies.width, c.width);
+  EXPECT_EQ(proxies.features.size(), std::size_t(c.plane_slots * c.width));
+  EXPECT_EQ(std::accumulate(proxies.mask.begin(), proxies.mask.end(), 0), 6);
+  EXPECT_EQ(proxies.input_planes.size(), 6u);
+  EXPECT_EQ(proxies.model, model);
+  // Slot planes are the input face planes, in the normalised frame.
+  for (int s = 0; s < 6; ++s) {
+    const int segment = proxies.slot_segments[s];
+    ASSERT_GE(segment, 0);
+    const Plane expected = proxies.normalization.apply(box.segmentation.planes[segment]);
+    EXPECT_NEAR(proxies.slot_planes[s].normal.dot(expected.normal), 1.0, 1e-5);
+    EXPECT_NEAR(proxies.slot_planes[s].offset, expected.offset, 1e-5);
+  }
+}
+
+TEST_F(PublicApi, CompleteReturnsTheNetworkOutputInTheUsersFrame) {
+  PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(box.cloud);
+  encoder.setSegmentation(box.segmentation);
+  PlaneProxies proxies;
+  encoder.encode(proxies);
+  ParametricCompleter completer;
+  completer.setModel(model);
+  completer.setInputProxies(proxies);
+  completer.setConfidenceThreshold(0.0);
+  std::vector<PlanarPrimitive> primitives;
+  completer.complete(primitives);
+
+  // The same cloud through the network directly, in the normalised frame.
+  const Normalization norm = Normalization::fromBoundingBox(*box.cloud);
+  const int64_t n = int64_t(box.cloud->size());
+  NetworkInput input{torch::empty({1, n, 3}), torch::empty({1, n, 3}), torch::empty({1, n}, torch::kLong)};
+  for (int64_t i = 0; i < n; ++i) {
+    const auto& p = box.cloud->points[i];
+    const Eigen::Vector3d x = norm.apply(Eigen::Vector3d(p.x, p.y, p.z));
+    const int label = box.segmentation.labels[i];
+    for (int a = 0; a < 3; ++a) {
+      input.points[0][i][a] = float(x[a]);
+      input.normals[0][i][a] = float(box.segmentation.planes[label].normal[a]);
+    }
+    input.labels[0][i] = label;
+  }
+  auto network = loadCheckpoint(dir.file("tiny.pt")).network;
+  torch::NoGradGuard no_grad;
+  const auto out = network->forward(input);
+  auto confidence = torch::sigmoid(out.logits[0]);
+  auto order = std::get<1>(confidence.sort(0, /*descending=*/true));
+
+  const int64_t M = model->config().kept_queries, P = model->config().points_per_plane;
+  ASSERT_EQ(int64_t(primitives.size()), M);  // threshold 0 keeps every query
+  const double unit = 1.0 / norm.scale;       // one normalised unit in user units
+  for (int64_t i = 0; i < M; ++i) {
+    const int64_t m = order[i].item<int64_t>();
+    const auto& primitive = primitives[i];
+    EXPECT_NEAR(primitive.confidence, confidence[m].item<float>(), 1e-5);
+    Eigen::Vector3d normal(out.normals[0][m][0].item<float>(), out.normals[0][m][1].item<float>(),
+                           out.normals[0][m][2].item<float>());
+    const Plane expected = norm.applyInverse(Plane(normal, -out.offsets[0][m].item<float>()));
+    EXPECT_NEAR(primitive.plane.normal.dot(expected.normal), 1.0, 1e-5);
+    EXPECT_NEAR(primitive.plane.offset, expected.offset, 1e-4 * unit);
+    ASSERT_EQ(int64_t(primitive.points.size()), P);
+    for (int64_t j = 0; j < P; ++j) {
+      const auto& q = primitive.points[j];
+      const Eigen::Vector3d x(q.x, q.y, q.z);
+      const Eigen::Vector3d want = norm.applyInverse(Eigen::Vector3d(
+          out.points[0][m][j][0].item<float>(), out.points[0][m][j][1].item<float>(),
+          out.points[0][m][j][2].item<float>()));
+      EXPECT_LT((x - want).norm(), 1e-4 * unit);
+      EXPECT_LT(std::abs(primitive.plane.signedDistance(x)), 1e-4 * unit);
+    }
+  }
+}
+
+TEST_F(PublicApi, ThresholdKeepsOnlyConfidentPrimitivesSorted) {
+  PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(box.cloud);
+  encoder.setSegmentation(box.segmentation);
+  PlaneProxies proxies;
+  encoder.encode(proxies);
+  ParametricCompleter completer;
+  completer.setModel(model);
+  completer.setInputProxies(proxies);
+  std::vector<PlanarPrimitive> all, confident;
+  completer.setConfidenceThreshold(0.0);
+  completer.complete(all);
+  // A threshold in the middle of the confidences splits them.
+  const double threshold = (all.front().confidence + all.back().confidence) / 2;
+  completer.setConfidenceThreshold(threshold);
+  completer.complete(confident);
+  const auto expected = std::count_if(all.begin(), all.end(), [&](const PlanarPrimitive& p) {
+    return p.confidence > threshold;
+  });
+  EXPECT_EQ(std::ptrdiff_t(confident.size()), expected);
+  EXPECT_GT(confident.size(), 0u);
+  EXPECT_LT(confident.size(), all.size());
+  for (std::size_t i = 0; i < confident.size(); ++i) {
+    EXPECT_GT(confident[i].confidence, threshold);
+    if (i > 0) {
+      EXPECT_LE(confident[i].confidence, confident[i - 1].confidence);
+    }
+  }
+  EXPECT_DOUBLE_EQ(ParametricCompleter().getConfidenceThreshold(), 0.7);
+}
+
+TEST_F(PublicApi, EncoderValidatesItsInput) {
+  PlaneProxyEncoder encoder;
+  PlaneProxies proxies;
+  encoder.setModel(model);
+  encoder.setSegmentation(box.segmentation);
+  EXPECT_THROW(encoder.encode(proxies), InvalidInputError);  // no cloud
+  encoder.setInputCloud(pcl::PointCloud<pcl::PointNormal>::Ptr(new pcl::PointCloud<pcl::PointNormal>));
+  EXPECT_THROW(encoder.encode(proxies), InvalidInputError);  // empty cloud
+  encoder.setInputCloud(box.cloud);
+  PlanarSegmentation short_labels = box.segmentation;
+  short_labels.labels.pop_back();
+  encoder.setSegmentation(short_labels);
+  try {
+    encoder.encode(proxies);
+    ADD_FAILURE() << "labels size mismatch accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2047 labels for 2048 points"), std::string::npos) << e.what();
+  }
+  encoder.setSegmentation(PlanarSegmentation{std::vector<int>(box.cloud->size(), -1), {}, {}});
+  EXPECT_THROW(encoder.encode(proxies), InvalidInputError);  // no segment
+  encoder.setSegmentation(box.segmentation);
+  auto nan_cloud = pcl::PointCloud<pcl::PointNormal>::Ptr(new pcl::PointCloud<pcl::PointNormal>(*box.cloud));
+  nan_cloud->points[5].x = std::numeric_limits<float>::quiet_NaN();
+  encoder.setInputCloud(nan_cloud);
+  EXPECT_THROW(encoder.encode(proxies), InvalidInputError);
+  PlaneProxyEncoder no_model;
+  no_model.setInputCloud(box.cloud);
+  no_model.setSegmentation(box.segmentation);
+  EXPECT_THROW(no_model.encode(proxies), ModelError);
+}
+
+TEST_F(PublicApi, CompleterValidatesItsInput) {
+  ParametricCompleter completer;
+  std::vector<PlanarPrimitive> primitives;
+  completer.setModel(model);
+  EXPECT_THROW(completer.complete(primitives), InvalidInputError);  // no proxies
+  PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(box.cloud);
+  encoder.setSegmentation(box.segmentation);
+  PlaneProxies proxies;
+  encoder.encode(proxies);
+  completer.setInputProxies(proxies);
+  completer.setConfidenceThreshold(1.5);
+  EXPECT_THROW(completer.complete(primitives), InvalidInputError);
+  completer.setConfidenceThreshold(0.7);
+  ParametricCompleter no_model;
+  no_model.setInputProxies(proxies);
+  EXPECT_THROW(no_model.complete(primitives), ModelError);
+  // Proxies from another model cannot be completed by this one.
+  PacoNetwork other(test::tinyModelConfig());
+  saveCheckpoint(dir.file("other.pt"), other);
+  completer.setModel(CompletionModel::load(dir.file("other.pt")));
+  EXPECT_THROW(completer.complete(primitives), ModelError);
+}
+
+TEST(CompletionModel, FindShippedModelHonoursTheEnvironment) {
+  ::setenv("PACO_MODEL", "/some/where/model.pt", 1);
+  EXPECT_EQ(CompletionModel::findShippedModel(), "/some/where/model.pt");
+  ::unsetenv("PACO_MODEL");
+  EXPECT_THROW(CompletionModel::load("/some/where/model.pt"), ModelError);
+}
+
+}  // namespace
+}  // namespace paco
+
+namespace paco {
+namespace {
+
+// The paco_complete tool end to end (skipped when the tool is not built: it needs the io and
+// segmentation modules).
+TEST(PacoCompleteTool, WritesPrimitivesAndFailsCleanly) {
+  const std::string tool = test::toolPath("paco_complete");
+  if (!std::filesystem::exists(tool)) GTEST_SKIP() << "paco_complete is not built";
+  test::TempDir dir;
+  PacoNetwork net(test::tinyModelConfig());
+  saveCheckpoint(dir.file("tiny.pt"), net);
+  SegmentedBox box;
+  std::string xyz;
+  for (const auto& p : box.cloud->points)
+    xyz += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + " " +
+           std::to_string(p.normal_x) + " " + std::to_string(p.normal_y) + " " +
+           std::to_string(p.normal_z) + "\n";
+  test::writeBytes(dir.file("box.xyz"), xyz);
+  std::string output;
+  const std::string common = tool + " " + dir.file("box.xyz") + " --segmenter region-growing --threads 1";
+  EXPECT_EQ(test::runCommand(common + " -o " + dir.file("out.vg") + " --pcd " + dir.file("out.pcd") +
+                                 " --threshold 0 --model " + dir.file("tiny.pt"),
+                             &output),
+            0)
+      << output;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out.vg"))) << output;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out.pcd"))) << output;
+  EXPECT_NE(output.find("complete: 6 primitives"), std::string::npos) << output;  // M = 6
+  // A corrupt model: a clear error, a non-zero exit and no output file.
+  test::writeBytes(dir.file("bad.pt"), "garbage");
+  EXPECT_NE(test::runCommand(common + " -o " + dir.file("bad.vg") + " --model " + dir.file("bad.pt"), &output), 0);
+  EXPECT_NE(output.find("corrupt"), std::string::npos) << output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad.vg")));
+  EXPECT_NE(test::runCommand(common + " -o " + dir.file("x.txt") + " --model " + dir.file("tiny.pt"), &output), 0);
+}
+
+}  // namespace
+}  // namespace paco

@@ -1,0 +1,354 @@
+#include <paco/common/error.h>
+#include <paco/common/progress.h>
+#include <paco/common/surface_mesh.h>
+#include <paco/completion/checkpoint.h>
+#include <paco/completion/trainer.h>
+
+#include <gtest/gtest.h>
+#include <shapes.h>
+#include <test_support.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+using namespace paco::completion;
+
+namespace {
+
+// A network small enough to train in seconds on one core.
+paco::ModelConfig tinyConfig() {
+  paco::ModelConfig c = paco::ModelConfig::preset("cpu");
+  c.name = "tiny";
+  c.num_centres = 32;
+  c.knn_k = 8;
+  c.input_embedding = 8;
+  c.edge_conv_widths = {16, 32};
+  c.group_norm_groups = 4;
+  c.width = 32;
+  c.heads = 2;
+  c.mlp_ratio = 2.0;
+  c.position_hidden = 16;
+  c.encoder_depth = 0;
+  c.encoder_graph_k = 0;
+  c.normal_hidden = 16;
+  c.plane_slots = 8;
+  c.global_width = 64;
+  c.generated_queries = 10;
+  c.kept_queries = 10;
+  c.decoder_depth = 1;
+  c.points_per_plane = 32;
+  c.distributor_hidden = 64;
+  return c;
+}
+
+// Test shapes centred at the origin with a bounding-box diagonal near 1; one plane per face.
+paco::SurfaceMesh shape(int which) {
+  if (which % 2 == 0) return paco::test::makeBox({-0.4, -0.3, -0.2}, {0.4, 0.3, 0.2});
+  paco::SurfaceMesh bracket = paco::test::makeLBracket(0.6, 0.25, 0.4);
+  paco::test::transformMesh(bracket, Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.3, -0.3, -0.2));
+  return bracket;
+}
+
+struct SyntheticSample {
+  torch::Tensor points, normals, labels;           // input
+  torch::Tensor gt_points, gt_labels, plane_normals, plane_offsets;
+};
+
+// GT: `gt_count` surface points; input: `input_count` points of the part with x < 0.15 (the
+// rest is "missing"), labelled with their face.
+SyntheticSample makeSample(int which, std::uint64_t seed, int input_count = 384, int gt_count = 768) {
+  const paco::SurfaceMesh mesh = shape(which);
+  SyntheticSample s;
+  const auto gt = paco::sampleSurface(mesh, static_cast<std::size_t>(gt_count), seed);
+  s.gt_points = torch::empty({gt_count, 3});
+  s.gt_labels = torch::empty({gt_count}, torch::kLong);
+  for (int i = 0; i < gt_count; ++i) {
+    for (int k = 0; k < 3; ++k) s.gt_points[i][k] = gt.points[i][k];
+    s.gt_labels[i] = static_cast<std::int64_t>(gt.faces[i]);
+  }
+  const auto faces = static_cast<std::int64_t>(mesh.faces.size());
+  s.plane_normals = torch::empty({faces, 3});
+  s.plane_offsets = torch::empty({faces});
+  for (std::int64_t f = 0; f < faces; ++f) {
+    const Eigen::Vector3d n = paco::faceNormal(mesh, static_cast<std::size_t>(f));
+    for (int k = 0; k < 3; ++k) s.plane_normals[f][k] = n[k];
+    s.plane_offsets[f] = n.dot(mesh.vertices[mesh.faces[f][0]]);
+  }
+  const auto dense = paco::sampleSurface(mesh, 4 * static_cast<std::size_t>(input_count), seed + 1);
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < dense.points.size(); ++i)
+    if (dense.points[i].x() < 0.15) kept.push_back(i);
+  const auto pick = resampleIndices(static_cast<std::int64_t>(kept.size()), input_count, seed + 2);
+  s.points = torch::empty({input_count, 3});
+  s.normals = torch::empty({input_count, 3});
+  s.labels = torch::empty({input_count}, torch::kLong);
+  for (int i = 0; i < input_count; ++i) {
+    const std::size_t j = kept[static_cast<std::size_t>(pick[i])];
+    for (int k = 0; k < 3; ++k) {
+      s.points[i][k] = dense.points[j][k];
+      s.normals[i][k] = dense.normals[j][k];
+    }
+    s.labels[i] = static_cast<std::int64_t>(dense.faces[j]);
+  }
+  return s;
+}
+
+TrainingBatch makeBatch(const std::vector<SyntheticSample>& samples) {
+  std::int64_t max_planes = 0;
+  for (const auto& s : samples) max_planes = std::max(max_planes, s.plane_normals.size(0));
+  std::vector<torch::Tensor> p, n, l, gp, gl, pn, po, pm;
+  for (const auto& s : samples) {
+    p.push_back(s.points);
+    n.push_back(s.normals);
+    l.push_back(s.labels);
+    gp.push_back(s.gt_points);
+    gl.push_back(s.gt_labels);
+    const auto count = s.plane_normals.size(0);
+    pn.push_back(torch::cat({s.plane_normals, torch::zeros({max_planes - count, 3})}));
+    po.push_back(torch::cat({s.plane_offsets, torch::zeros({max_planes - count})}));
+    pm.push_back(torch::arange(max_planes) < count);
+  }
+  TrainingBatch batch;
+  batch.input.points = torch::stack(p);
+  batch.input.normals = torch::stack(n);
+  batch.input.labels = torch::stack(l);
+  batch.truth.points = torch::stack(gp);
+  batch.truth.labels = torch::stack(gl);
+  batch.truth.normals = torch::stack(pn);
+  batch.truth.offsets = torch::stack(po);
+  batch.truth.mask = torch::stack(pm);
+  return batch;
+}
+
+// A source of `count` synthetic samples (box and bracket, different samplings).
+BatchSource syntheticSource(std::size_t count) {
+  BatchSource source;
+  source.size = count;
+  source.load = [](const std::vector<std::size_t>& indices, std::uint64_t) {
+    std::vector<SyntheticSample> samples;
+    for (std::size_t i : indices) samples.push_back(makeSample(static_cast<int>(i), 100 + i));
+    return makeBatch(samples);
+  };
+  return source;
+}
+
+TrainerOptions tinyOptions(const std::string& folder) {
+  TrainerOptions options;
+  options.model = tinyConfig();
+  options.batch_size = 2;
+  options.learning_rate = 1e-3;
+  options.seed = 5;
+  options.show_progress = false;
+  options.checkpoint_dir = folder;
+  return options;
+}
+
+struct ThreadsGuard {  // deterministic arithmetic for the comparisons below
+  int previous = torch::get_num_threads();
+  ThreadsGuard() { torch::set_num_threads(1); }
+  ~ThreadsGuard() { torch::set_num_threads(previous); }
+};
+
+}  // namespace
+
+TEST(Trainer, TinyModelOverfitsOneBatch) {
+  ThreadsGuard threads;
+  const auto start = std::chrono::steady_clock::now();
+  TrainerOptions options = tinyOptions("");
+  options.learning_rate = 2e-3;
+  Trainer trainer(options);
+  const TrainingBatch batch = makeBatch({makeSample(0, 1), makeSample(1, 2)});
+  const double initial = trainer.step(batch).total.item<double>();
+  double recent = initial;
+  std::vector<double> history;
+  // A fixed budget (not "until 5x"), so the test also shows the loss keeps falling.
+  for (int i = 0; i < 150; ++i) history.push_back(trainer.step(batch).total.item<double>());
+  recent = 0.0;
+  for (std::size_t k = history.size() - 10; k < history.size(); ++k) recent += history[k] / 10.0;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  RecordProperty("initial_loss", std::to_string(initial));
+  RecordProperty("final_loss", std::to_string(recent));
+  RecordProperty("steps", static_cast<int>(history.size()));
+  EXPECT_LT(recent * 5.0, initial) << "initial " << initial << ", last-10 mean " << recent << " after "
+                                   << history.size() << " steps";
+  EXPECT_LT(seconds, 120.0);
+  // The trained selector recognises the GT planes of the batch.
+  const auto [loss, metrics] = trainer.evaluate(batch);
+  RecordProperty("recall", std::to_string(metrics.recall));
+  RecordProperty("nc_prim", std::to_string(metrics.nc_prim));
+  EXPECT_GT(metrics.nc_prim, 0.9);
+  EXPECT_LT(loss.total.item<double>() * 5.0, initial);
+}
+
+TEST(Trainer, LearningRateScheduleAndParameterGroups) {
+  Trainer trainer(tinyOptions(""));
+  EXPECT_DOUBLE_EQ(trainer.learningRateAt(0), 1e-3);
+  EXPECT_NEAR(trainer.learningRateAt(21), 1e-3 * 0.9, 1e-15);
+  EXPECT_NEAR(trainer.learningRateAt(42), 1e-3 * 0.81, 1e-15);
+  EXPECT_NEAR(trainer.learningRateAt(100000), 1e-3 * 0.02, 1e-15);  // floor
+  auto& groups = trainer.optimizer().param_groups();
+  ASSERT_EQ(groups.size(), 2u);
+  const auto& decay = static_cast<torch::optim::AdamWOptions&>(groups[0].options());
+  const auto& no_decay = static_cast<torch::optim::AdamWOptions&>(groups[1].options());
+  EXPECT_DOUBLE_EQ(decay.weight_decay(), 5e-4);
+  EXPECT_DOUBLE_EQ(no_decay.weight_decay(), 0.0);
+  for (const auto& p : groups[0].params()) EXPECT_GE(p.dim(), 2);
+  for (const auto& p : groups[1].params()) EXPECT_LE(p.dim(), 1);
+  EXPECT_FALSE(groups[1].params().empty());
+}
+
+TEST(Trainer, ResumeContinuesExactlyAsAnUninterruptedRun) {
+  ThreadsGuard threads;
+  paco::test::TempDir dir;
+  const BatchSource train = syntheticSource(6);  // 3 batches of 2 per epoch
+  const BatchSource val = syntheticSource(2);
+
+  TrainerOptions straight_options = tinyOptions(dir.file("straight"));
+  straight_options.epochs = 2;
+  Trainer straight(straight_options);
+  const auto straight_records = straight.fit(train, val);
+  ASSERT_EQ(straight_records.size(), 2u);
+  EXPECT_FALSE(straight.interrupted());
+  EXPECT_EQ(straight.globalStep(), 6);
+
+  // Same run, interrupted after step 4 (inside epoch 2), then resumed by a new trainer.
+  TrainerOptions broken_options = tinyOptions(dir.file("broken"));
+  broken_options.epochs = 2;
+  broken_options.on_step = [](std::int64_t step) {
+    if (step == 4) paco::setInterruptRequested(true);
+  };
+  {
+    Trainer first(broken_options);
+    const auto records = first.fit(train, val);
+    paco::setInterruptRequested(false);
+    EXPECT_TRUE(first.interrupted());
+    EXPECT_EQ(records.size(), 1u);
+    EXPECT_EQ(first.globalStep(), 4);
+  }
+  broken_options.on_step = nullptr;
+  broken_options.seed = 999;  // ignored: the checkpoint's seed drives the data order
+  Trainer second(broken_options);
+  second.resume(dir.file("broken") + "/last.pt");
+  EXPECT_EQ(second.epoch(), 1);
+  EXPECT_EQ(second.epochBatch(), 1u);
+  EXPECT_EQ(second.globalStep(), 4);
+  const auto records = second.fit(train, val);
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(second.globalStep(), 6);
+  EXPECT_NEAR(records[0].train_loss, straight_records[1].train_loss, 1e-6 * std::abs(straight_records[1].train_loss));
+  EXPECT_NEAR(records[0].val_loss, straight_records[1].val_loss, 1e-6 * std::abs(straight_records[1].val_loss));
+
+  const auto a = straight.network()->parameters();
+  const auto b = second.network()->parameters();
+  ASSERT_EQ(a.size(), b.size());
+  double max_difference = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    max_difference = std::max(max_difference, (a[i] - b[i]).abs().max().item<double>());
+  EXPECT_LT(max_difference, 1e-6);
+
+  // Files: last + best checkpoints and a CSV with a header and one row per finished epoch.
+  for (const char* name : {"last.pt", "best.pt", "training_log.csv"})
+    EXPECT_TRUE(std::filesystem::exists(dir.file("broken") + "/" + name)) << name;
+  std::ifstream csv(dir.file("broken") + "/training_log.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("epoch,step,lr,train_loss,train_classification", 0), 0u);
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 2);
+}
+
+TEST(Trainer, ResumeNeedsATrainingCheckpoint) {
+  paco::test::TempDir dir;
+  Trainer trainer(tinyOptions(""));
+  paco::saveCheckpoint(dir.file("model.pt"), trainer.network());
+  EXPECT_THROW(trainer.resume(dir.file("model.pt")), paco::ModelError);
+  paco::test::writeBytes(dir.file("junk.pt"), "not a checkpoint");
+  EXPECT_THROW(trainer.resume(dir.file("junk.pt")), paco::ModelError);
+}
+
+TEST(Trainer, RejectsBadOptionsAndEmptyData) {
+  TrainerOptions options = tinyOptions("");
+  options.batch_size = 0;
+  EXPECT_THROW(Trainer{options}, paco::InvalidInputError);
+  Trainer trainer(tinyOptions(""));
+  EXPECT_THROW(trainer.fit(BatchSource{}, BatchSource{}), paco::InvalidInputError);
+}
+
+TEST(Trainer, LoaderErrorsReachTheCaller) {
+  Trainer trainer(tinyOptions(""));
+  BatchSource broken;
+  broken.size = 4;
+  broken.load = [](const std::vector<std::size_t>&, std::uint64_t) -> TrainingBatch {
+    throw paco::IoError("part file damaged");
+  };
+  EXPECT_THROW(trainer.fit(broken, BatchSource{}), paco::IoError);
+}
+
+TEST(Trainer, EpochOrderIsASeededPermutation) {
+  const auto a = epochOrder(50, 3, 0);
+  EXPECT_EQ(a, epochOrder(50, 3, 0));
+  EXPECT_NE(a, epochOrder(50, 3, 1));
+  EXPECT_NE(a, epochOrder(50, 4, 0));
+  auto sorted = a;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 0; i < sorted.size(); ++i) EXPECT_EQ(sorted[i], i);
+}
+
+#if PACO_HAVE_DATA
+#include <paco/data/builder.h>
+
+TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
+  const std::string tool = paco::test::toolPath("paco_train");
+  if (!std::filesystem::exists(tool)) GTEST_SKIP() << "paco_train is not built";
+  paco::test::TempDir dir;
+  // A tiny dataset of test shapes: 3 training parts and 1 validation part (split by name hash).
+  paco::data::BuildOptions build;
+  build.info.levels = {0};
+  build.info.views = 2;
+  build.info.input_points = 256;
+  build.info.gt_points = 512;
+  build.info.dense_points = 2048;
+  build.info.source = "test shapes";
+  paco::data::DatasetWriter writer(dir.file("data"), build.info);
+  int train_parts = 0, val_parts = 0;
+  for (int i = 0; i < 200 && (train_parts < 3 || val_parts < 1); ++i) {
+    const std::string name = "shape-" + std::to_string(i);
+    const auto split = paco::data::splitOf(name);
+    if (split == paco::data::Split::Test || (split == paco::data::Split::Train && train_parts >= 3) ||
+        (split == paco::data::Split::Val && val_parts >= 1))
+      continue;
+    (split == paco::data::Split::Train ? train_parts : val_parts)++;
+    writer.write(paco::data::buildPart(name, shape(i), build));
+  }
+  ASSERT_EQ(train_parts, 3);
+  ASSERT_EQ(val_parts, 1);
+  {
+    std::ofstream config(dir.file("tiny.json"));
+    config << tinyConfig().toJson();
+  }
+  const std::string base = tool + " " + dir.file("data") + " -o " + dir.file("run") + " --config " +
+                           dir.file("tiny.json") + " --batch 2 --threads 1 --input-points 256 --gt-points 512 --quiet";
+  std::string output;
+  ASSERT_EQ(paco::test::runCommand(base + " --epochs 1", &output), 0) << output;
+  for (const char* name : {"last.pt", "best.pt", "training_log.csv"})
+    EXPECT_TRUE(std::filesystem::exists(dir.file("run") + "/" + name)) << name << "\n" << output;
+  EXPECT_NE(output.find("6 training, 2 validation samples"), std::string::npos) << output;
+  // The folder holds a run: starting again without --resume is refused.
+  EXPECT_NE(paco::test::runCommand(base + " --epochs 1", &output), 0);
+  EXPECT_NE(output.find("--resume"), std::string::npos) << output;
+  ASSERT_EQ(paco::test::runCommand(base + " --epochs 2 --resume", &output), 0) << output;
+  EXPECT_NE(output.find("resumed"), std::string::npos) << output;
+  std::ifstream csv(dir.file("run") + "/training_log.csv");
+  std::string line;
+  int rows = -1;  // header
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 2);
+  // A bad loss name is a usage error.
+  EXPECT_NE(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") +
+                                   " --disable-loss chamfer", &output), 0);
+  EXPECT_NE(output.find("known terms"), std::string::npos) << output;
+}
+#endif
