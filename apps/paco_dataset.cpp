@@ -48,6 +48,8 @@ struct Options {
   bool augment_rotate = false;
   std::uint64_t seed = 1;
   std::size_t limit = 0;
+  std::string only_split;
+  std::size_t stride = 1;
   unsigned jobs = 2;
   int input_points = 2048;
   int gt_points = 8192;
@@ -111,6 +113,20 @@ std::vector<Job> collectJobs(const Options& o, const std::string& mesh_dir, std:
     }
     std::sort(files.begin(), files.end());
     if (files.empty()) throw paco::IoError("no .obj/.off/.ply/.stl mesh in '" + mesh_dir + "'");
+    // Subsets that are reproducible from the names alone: one split, then every K-th, then N.
+    if (!o.only_split.empty()) {
+      const paco::data::Split wanted = paco::data::splitFromString(o.only_split);
+      std::vector<fs::path> kept;
+      for (const auto& f : files)
+        if (paco::data::splitOf(f.stem().string()) == wanted) kept.push_back(f);
+      files = std::move(kept);
+    }
+    if (o.stride > 1) {
+      std::vector<fs::path> kept;
+      for (std::size_t i = 0; i < files.size(); i += o.stride) kept.push_back(files[i]);
+      files = std::move(kept);
+    }
+    if (files.empty()) throw paco::IoError("no mesh of '" + mesh_dir + "' is left after --only-split/--stride");
     if (o.limit > 0 && files.size() > o.limit) files.resize(o.limit);
     std::map<std::string, std::string> seen;
     for (const auto& file : files) {
@@ -207,7 +223,9 @@ int run(int argc, char** argv) {
       ("augment-scale", po::value(&o.augment_scale), "random anisotropic scale per axis, log-uniform in MIN,MAX (e.g. 0.5,2)")
       ("augment-rotate", po::bool_switch(&o.augment_rotate), "random rotation of every part")
       ("seed", po::value(&o.seed)->default_value(o.seed), "base seed of every random choice")
-      ("limit", po::value(&o.limit), "use only the first N meshes of MESH_DIR (sorted by name)")
+      ("only-split", po::value(&o.only_split), "use only the meshes of this split (train, val or test; by hash of the name)")
+      ("stride", po::value(&o.stride)->default_value(o.stride), "use every K-th mesh (sorted by name, after --only-split)")
+      ("limit", po::value(&o.limit), "use only the first N meshes of MESH_DIR (sorted by name, after --only-split and --stride)")
       ("jobs,j", po::value(&o.jobs)->default_value(o.jobs), "worker threads")
       ("input-points", po::value(&o.input_points)->default_value(o.input_points), "points per partial input")
       ("gt-points", po::value(&o.gt_points)->default_value(o.gt_points), "ground-truth points per part")
@@ -247,6 +265,7 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("expected MESH_DIR OUT_DIR, or --procedural N OUT_DIR");
   }
   if (o.views < 1 || o.views > 255) throw paco::app::UsageError("--views must be in 1..255");
+  if (o.stride < 1) throw paco::app::UsageError("--stride must be at least 1");
   if (o.jobs < 1) throw paco::app::UsageError("--jobs must be >= 1");
   if (!(o.noise >= 0.0)) throw paco::app::UsageError("--noise must be >= 0");
   if (o.input_points < 1 || o.gt_points < 1 || o.dense_points < o.input_points)

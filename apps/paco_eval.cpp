@@ -1,0 +1,222 @@
+// paco_eval: the paper's metrics (CD, HD, NC, #f, #v) for one predicted mesh against its ground
+// truth, or a whole evaluation of methods and assemblers on a dataset split (CSV + tables).
+//   paco_eval --pred result.obj --gt part.obj
+//   paco_eval --dataset data/mfcad --split val --methods direct,oracle,poisson-qem -o out/eval
+#include "app_support.h"
+
+#include <paco/common/error.h>
+#include <paco/common/progress.h>
+#include <paco/evaluation/benchmark.h>
+#include <paco/evaluation/metrics.h>
+#include <paco/evaluation/report.h>
+#include <paco/io/mesh_io.h>
+
+#include <boost/algorithm/string.hpp>
+#include <boost/program_options.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+namespace po = boost::program_options;
+namespace ev = paco::evaluation;
+
+namespace {
+
+const char kTool[] = "paco_eval";
+
+struct Options {
+  std::string pred, gt;
+  bool same_seed = false;
+  bool score_failure = false;
+  std::string dataset, split = "val", methods = "direct,oracle,poisson-qem", assemblers = "polyfit,cell-complex";
+  std::string levels = "0,1,2", views = "0", output_dir, failure_box = "bbox", segmenter = "gocopp";
+  std::size_t limit = 0, samples = 10000, qem_faces = 40;
+  unsigned jobs = 1;
+  double time_limit = 60.0;
+  bool dataset_labels = false;
+  bool quiet = false;
+};
+
+void printHelp(const po::options_description& visible) {
+  std::cout << "Usage:\n"
+            << "  " << kTool << " --pred MESH --gt MESH            metrics of one mesh\n"
+            << "  " << kTool << " --dataset DIR -o OUT_DIR [options]  evaluate methods on a dataset split\n\n"
+            << "Single mode prints CD, HD (both x 100, in the GT's normalised frame of unit bounding-box\n"
+            << "diagonal), NC, #f, #v, whether the prediction is a closed solid and its volume / the GT's.\n"
+            << "Dataset mode writes OUT_DIR/eval.csv (one row per case; an existing one is resumed: its\n"
+            << "cases are skipped) and OUT_DIR/results.md (tables per level and overall). A case fails when\n"
+            << "it has no mesh, an empty, open, non-manifold or non-oriented one, runs out of time or\n"
+            << "throws; it is then scored as the failure box. Methods: direct, oracle, poisson-qem,\n"
+            << "box-prior, sanity (every case scored as failed), paco (when the learned stages are built).\n"
+            << "Available in this build: " << boost::algorithm::join(ev::availableMethods(), ", ") << "\n\n"
+            << visible << std::endl;
+}
+
+std::vector<std::string> splitList(const std::string& text) {
+  std::vector<std::string> items;
+  boost::algorithm::split(items, text, boost::is_any_of(","), boost::token_compress_on);
+  items.erase(std::remove_if(items.begin(), items.end(), [](const std::string& s) { return s.empty(); }), items.end());
+  for (auto& s : items) boost::algorithm::trim(s);
+  return items;
+}
+
+std::vector<int> intList(const std::string& text, const char* option) {
+  std::vector<int> values;
+  for (const auto& item : splitList(text)) {
+    try {
+      std::size_t used = 0;
+      values.push_back(std::stoi(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw paco::app::UsageError(std::string("--") + option + " takes a comma-separated list of integers, got '" + text + "'");
+    }
+  }
+  if (values.empty()) throw paco::app::UsageError(std::string("--") + option + " is empty");
+  return values;
+}
+
+ev::FailureBox failureBoxFromName(const std::string& name) {
+  if (name == "bbox") return ev::FailureBox::ReferenceBoundingBox;
+  if (name == "cube") return ev::FailureBox::UnitDiagonalCube;
+  throw paco::app::UsageError("--failure-box must be bbox or cube");
+}
+
+paco::SurfaceMesh loadForEvaluation(const std::string& path, const char* what) {
+  paco::SurfaceMesh mesh = paco::io::loadMesh(path, /*allow_no_faces=*/true);
+  if (mesh.faces.empty())
+    throw paco::InvalidInputError(std::string(what) + " mesh '" + path +
+                                  "' has no faces; give a polygon mesh (a point cloud cannot be scored)");
+  return mesh;
+}
+
+// What a failed case scores against this GT (the failure box), and the sampling floor.
+int scoreFailure(const Options& o) {
+  const paco::SurfaceMesh gt = loadForEvaluation(o.gt, "ground-truth");
+  ev::MetricOptions options;
+  options.num_samples = o.samples;
+  const ev::MeshMetrics f = ev::evaluateFailure(gt, options, failureBoxFromName(o.failure_box));
+  const ev::MeshMetrics floor = ev::evaluateMesh(gt, gt, options);
+  std::printf("failure: CD=%.4f HD=%.4f NC=%.4f\nfloor: CD=%.4f HD=%.4f NC=%.4f\n", f.chamfer, f.hausdorff,
+              f.normal_consistency, floor.chamfer, floor.hausdorff, floor.normal_consistency);
+  return 0;
+}
+
+int single(const Options& o) {
+  paco::app::StageTimer timer;
+  timer.start("load");
+  const paco::SurfaceMesh pred = loadForEvaluation(o.pred, "predicted");
+  const paco::SurfaceMesh gt = loadForEvaluation(o.gt, "ground-truth");
+  timer.stop();
+  ev::MetricOptions options;
+  options.num_samples = o.samples;
+  if (o.same_seed) options.reference_seed = options.prediction_seed;
+  timer.start("evaluate");
+  const ev::MeshMetrics m = ev::evaluateMesh(pred, gt, options);
+  timer.stop();
+  const ev::FailureReason reason = ev::classifyMesh(pred);
+  std::printf("CD=%.4f HD=%.4f NC=%.4f #f=%zu #v=%zu closed=%s", m.chamfer, m.hausdorff, m.normal_consistency,
+              m.num_faces, m.num_vertices, m.closed ? "yes" : "no");
+  if (!std::isnan(m.volume_ratio)) std::printf(" volume_ratio=%.4f", m.volume_ratio);
+  std::printf("\n");
+  if (reason != ev::FailureReason::None) {
+    const ev::MeshMetrics f = ev::evaluateFailure(gt, options, failureBoxFromName(o.failure_box));
+    std::printf("note: in a dataset evaluation this mesh counts as failed (%s) and scores as the failure box: "
+                "CD=%.4f HD=%.4f NC=%.4f\n",
+                ev::toString(reason).c_str(), f.chamfer, f.hausdorff, f.normal_consistency);
+  }
+  if (!o.quiet) timer.print();
+  return 0;
+}
+
+int dataset(const Options& o) {
+  if (o.output_dir.empty()) throw paco::app::UsageError("dataset mode needs an output folder: -o OUT_DIR");
+  ev::BenchmarkOptions b;
+  b.dataset = o.dataset;
+  b.split = o.split;
+  b.methods = splitList(o.methods);
+  b.assemblers = splitList(o.assemblers);
+  b.levels = intList(o.levels, "levels");
+  b.views = intList(o.views, "views");
+  b.limit = o.limit;
+  if (o.jobs < 1) throw paco::app::UsageError("--jobs must be at least 1");
+  b.jobs = o.jobs;
+  b.output_dir = o.output_dir;
+  b.progress = !o.quiet;
+  b.method.time_limit = o.time_limit;
+  b.method.segmenter = o.segmenter;
+  b.method.use_dataset_labels = o.dataset_labels;
+  b.method.qem_target_faces = o.qem_faces;
+  b.metrics.num_samples = o.samples;
+  b.failure_box = failureBoxFromName(o.failure_box);
+  paco::InterruptGuard guard;
+  const ev::BenchmarkRun run = ev::runBenchmark(b);
+  std::printf("%zu cases: %zu evaluated now (%zu failed), %zu already in the CSV", run.cases_total, run.cases_evaluated,
+              run.cases_failed, run.cases_resumed);
+  if (run.samples_unreadable) std::printf(", %zu unreadable samples", run.samples_unreadable);
+  std::printf("\nwrote '%s' and '%s'\n", run.csv_path.c_str(), run.report_path.c_str());
+  if (run.interrupted) {
+    std::printf("interrupted: run the same command again to resume\n");
+    return 130;
+  }
+  return 0;
+}
+
+int run(int argc, char** argv) {
+  Options o;
+  po::options_description visible("Options");
+  visible.add_options()
+      ("help,h", "print this help")
+      ("pred", po::value(&o.pred), "single mode: predicted mesh (.obj .off .ply .stl)")
+      ("gt", po::value(&o.gt), "single mode: ground-truth mesh")
+      ("score-failure", po::bool_switch(&o.score_failure), "with --gt only: print what a failed case scores (the failure box) and the sampling floor (the GT against itself)")
+      ("same-seed", po::bool_switch(&o.same_seed), "single mode: sample both meshes with the same seed (a mesh against itself scores exactly 0)")
+      ("dataset", po::value(&o.dataset), "dataset mode: folder written by paco_dataset")
+      ("split", po::value(&o.split)->default_value(o.split), "train, val or test")
+      ("methods", po::value(&o.methods)->default_value(o.methods), "comma-separated: direct, oracle, poisson-qem, box-prior, sanity, paco")
+      ("assemblers", po::value(&o.assemblers)->default_value(o.assemblers), "comma-separated: polyfit, cell-complex")
+      ("levels", po::value(&o.levels)->default_value(o.levels), "missing levels: 0 (25 %), 1 (50 %), 2 (75 %)")
+      ("views", po::value(&o.views)->default_value(o.views), "view indices")
+      ("limit", po::value(&o.limit)->default_value(o.limit), "at most this many parts (first by name); 0: all")
+      ("jobs,j", po::value(&o.jobs)->default_value(o.jobs), "samples evaluated in parallel")
+      ("output,o", po::value(&o.output_dir), "dataset mode: output folder (eval.csv, results.md)")
+      ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "seconds per assembly; past it the case fails as time-limit")
+      ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct and box-prior")
+      ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
+      ("qem-faces", po::value(&o.qem_faces)->default_value(o.qem_faces), "poisson-qem: triangles after simplification")
+      ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
+      ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
+      ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(visible).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  if (vm.count("help")) {
+    printHelp(visible);
+    return 0;
+  }
+  const bool single_mode = !o.pred.empty() || !o.gt.empty();
+  if (single_mode && !o.dataset.empty()) throw paco::app::UsageError("give either --pred/--gt or --dataset, not both");
+  if (o.score_failure) {
+    if (o.gt.empty() || !o.pred.empty() || !o.dataset.empty())
+      throw paco::app::UsageError("--score-failure takes --gt MESH only");
+    return scoreFailure(o);
+  }
+  if (single_mode) {
+    if (o.pred.empty() || o.gt.empty()) throw paco::app::UsageError("single mode needs both --pred MESH and --gt MESH");
+    return single(o);
+  }
+  if (!o.dataset.empty()) return dataset(o);
+  throw paco::app::UsageError("nothing to do: give --pred MESH --gt MESH, or --dataset DIR -o OUT_DIR");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return paco::app::runTool(kTool, [&] { return run(argc, argv); });
+}

@@ -1,0 +1,98 @@
+#pragma once
+// Usage:
+//   paco::evaluation::MethodInput in; in.input = partial; in.gt_points = ...; in.gt_planes = ...;
+//   paco::evaluation::MethodOptions opt; opt.assembler = "cell-complex";
+//   paco::evaluation::MethodOutput out = paco::evaluation::runMethod("direct", in, opt);
+#include <paco/common/plane.h>
+#include <paco/common/primitive.h>
+#include <paco/common/surface_mesh.h>
+#include <paco/evaluation/report.h>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace paco::evaluation {
+
+/// What a method sees of one sample (everything in the sample's normalised frame).
+struct MethodInput {
+  pcl::PointCloud<pcl::PointNormal> input;  ///< the partial scan, with normals
+  std::vector<int> input_labels;            ///< per input point: its segment in the dataset (-1 none); may be empty
+  pcl::PointCloud<pcl::PointNormal> gt_points;  ///< GT surface points (oracle only)
+  std::vector<int> gt_labels;               ///< per GT point: index into gt_planes (oracle only)
+  std::vector<Plane> gt_planes;             ///< the complete set of GT planes (oracle only)
+};
+
+/// Parameters shared by every method.
+struct MethodOptions {
+  /// Assembler backend: "polyfit" (PolyFit + CBC, default) or "cell-complex".
+  std::string assembler = "polyfit";
+  /// Time budget of one assembly or reconstruction, in seconds (> 0; default 60).
+  double time_limit = 60.0;
+  /// Planar segmenter backend for the visible points of `direct` and `box-prior` (default "gocopp").
+  std::string segmenter = "gocopp";
+  /// Use the dataset's labels of the input points instead of running the segmenter (default
+  /// false). The dataset's labels are GT face labels unless it was built with the segmenter.
+  bool use_dataset_labels = false;
+  /// poisson-qem: triangles kept by the Garland–Heckbert simplification (default 40, close to the
+  /// 39 triangles of the paper's Table 3).
+  std::size_t qem_target_faces = 40;
+  /// box-prior: spacing of the points sampled on empty parts of the bounding-box faces, and the
+  /// distance to the nearest input point beyond which a part counts as empty, both as fractions
+  /// of the input's bounding-box diagonal (defaults 0.02 and 0.05).
+  double prior_spacing = 0.02;
+  double prior_empty_radius = 0.05;
+};
+
+/// What a method produced; runMethod never throws for a failure of the method itself.
+struct MethodOutput {
+  bool has_mesh = false;     ///< a mesh was produced (it may still be defective)
+  SurfaceMesh mesh;          ///< in the sample's normalised frame
+  bool has_planes = false;   ///< the method produced planar primitives (for NC_prim)
+  std::vector<Plane> planes; ///< the primitives' planes given to the assembler
+  FailureReason reason = FailureReason::None;  ///< set when the method failed before a mesh existed
+  std::string message;       ///< why it failed (or notes, e.g. "time limit hit, best solution used")
+  std::map<std::string, double> seconds;       ///< wall time per stage (names from stageNames())
+};
+
+/// A method: input + options -> output. Must not throw for a failed reconstruction; runMethod
+/// turns an exception into FailureReason::Threw anyway.
+using MethodFunction = std::function<MethodOutput(const MethodInput&, const MethodOptions&)>;
+
+/// Adds (or replaces) a method by name, e.g. the full pipeline "paco" once paco::completion is
+/// built: registerMethod("paco", runPaco, true). `uses_assembler`: it is run once per assembler.
+void registerMethod(const std::string& name, MethodFunction method, bool uses_assembler);
+/// Names of the methods this build can run: direct, oracle, box-prior (need paco::segmentation and
+/// paco::assembly), poisson-qem (needs CGAL), sanity, plus registered ones.
+std::vector<std::string> availableMethods();
+/// The methods the evaluation knows of, built or not (for messages).
+std::vector<std::string> knownMethods();
+/// True when the method runs once per assembler; false for poisson-qem and sanity.
+bool methodUsesAssembler(const std::string& name);
+/// Runs a method; throws InvalidInputError for a name not in availableMethods() (saying what the
+/// build lacks), never for a failure of the method (that is in MethodOutput::reason).
+MethodOutput runMethod(const std::string& name, const MethodInput& input, const MethodOptions& options);
+
+/// The poisson-qem baseline on its own: normals of `points` estimated (PCA, 18 neighbours) and
+/// oriented (minimum spanning tree), CGAL Poisson surface reconstruction, then CGAL
+/// Garland–Heckbert edge collapse (plane quadrics) down to `target_faces` triangles. Throws
+/// InvalidInputError for fewer than 10 points; returns an empty mesh when Poisson fails.
+/// `seconds` receives "reconstruct" and "simplify" times.
+SurfaceMesh reconstructPoissonQem(const pcl::PointCloud<pcl::PointNormal>& points, std::size_t target_faces,
+                                  std::map<std::string, double>* seconds = nullptr);
+
+/// box-prior's completion on its own: `visible` primitives plus the six planes of the oriented
+/// bounding box of `cloud`, with points sampled on the parts of those faces that have no input
+/// point within `empty_radius` (fractions of the cloud's bounding-box diagonal). A box face that
+/// coincides with a visible primitive (within 10 degrees and 2 % of the diagonal) adds its points
+/// to that primitive instead of a new one.
+std::vector<PlanarPrimitive> addBoundingBoxPrior(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                                 std::vector<PlanarPrimitive> visible, double spacing = 0.02,
+                                                 double empty_radius = 0.05);
+
+}  // namespace paco::evaluation

@@ -1,0 +1,373 @@
+#include <paco/evaluation/methods.h>
+
+#include <paco/common/error.h>
+#include <paco/common/normalization.h>
+
+#ifdef PACO_EVALUATION_WITH_ASSEMBLY
+#include <paco/assembly/polygonal_assembler.h>
+#endif
+#ifdef PACO_EVALUATION_WITH_SEGMENTATION
+#include <paco/segmentation/planar_segmenter.h>
+#endif
+
+#include <pcl/kdtree/kdtree_flann.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+
+namespace paco::evaluation {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct Entry {
+  MethodFunction function;
+  bool uses_assembler = true;
+};
+
+std::mutex& registryMutex() {
+  static std::mutex m;
+  return m;
+}
+std::map<std::string, Entry>& registry() {
+  static std::map<std::string, Entry> r;
+  return r;
+}
+
+// Primitives of the visible points: from the dataset's labels or from a PlanarSegmenter.
+[[maybe_unused]] std::vector<PlanarPrimitive> visiblePrimitives(const MethodInput& in, const MethodOptions& options, MethodOutput& out) {
+  const auto start = std::chrono::steady_clock::now();
+  PlanarSegmentation seg;
+  if (options.use_dataset_labels) {
+    if (in.input_labels.size() != in.input.size())
+      throw InvalidInputError("the sample has " + std::to_string(in.input_labels.size()) + " input labels for " +
+                              std::to_string(in.input.size()) + " points; rebuild the dataset");
+    int count = 0;
+    for (int l : in.input_labels) count = std::max(count, l + 1);
+    std::vector<std::vector<Eigen::Vector3d>> groups(static_cast<std::size_t>(count));
+    for (std::size_t i = 0; i < in.input.size(); ++i)
+      if (in.input_labels[i] >= 0) groups[static_cast<std::size_t>(in.input_labels[i])].push_back(in.input[i].getVector3fMap().cast<double>());
+    std::vector<int> renumber(static_cast<std::size_t>(count), -1);
+    for (int l = 0; l < count; ++l) {
+      if (groups[static_cast<std::size_t>(l)].size() < 3) continue;
+      // Orient like the points' normals (the label's first point is as good as any).
+      Eigen::Vector3d hint = Eigen::Vector3d::Zero();
+      for (std::size_t i = 0; i < in.input.size(); ++i)
+        if (in.input_labels[i] == l) hint += in.input[i].getNormalVector3fMap().cast<double>();
+      try {
+        seg.planes.push_back(Plane::fit(groups[static_cast<std::size_t>(l)], hint));
+        renumber[static_cast<std::size_t>(l)] = static_cast<int>(seg.planes.size()) - 1;
+      } catch (const Error&) {
+        // collinear points: no plane
+      }
+    }
+    seg.labels.resize(in.input.size());
+    for (std::size_t i = 0; i < in.input.size(); ++i)
+      seg.labels[i] = in.input_labels[i] >= 0 ? renumber[static_cast<std::size_t>(in.input_labels[i])] : -1;
+    seg.rebuildSegmentsFromLabels();
+  } else {
+#ifdef PACO_EVALUATION_WITH_SEGMENTATION
+    auto segmenter = makePlanarSegmenter<pcl::PointNormal>(options.segmenter);
+    segmenter->setInputCloud(in.input.makeShared());
+    segmenter->setNumberOfThreads(1);
+    segmenter->segment(seg);
+#else
+    throw InvalidInputError("this build has no paco::segmentation; use the dataset's labels (--dataset-labels)");
+#endif
+  }
+  out.seconds["segment"] = secondsSince(start);
+  return makePrimitives(in.input, seg);
+}
+
+[[maybe_unused]] std::vector<PlanarPrimitive> oraclePrimitives(const MethodInput& in) {
+  if (in.gt_labels.size() != in.gt_points.size())
+    throw InvalidInputError("the sample's GT labels do not match its GT points");
+  std::vector<PlanarPrimitive> primitives(in.gt_planes.size());
+  for (std::size_t p = 0; p < in.gt_planes.size(); ++p) primitives[p].plane = in.gt_planes[p];
+  for (std::size_t i = 0; i < in.gt_points.size(); ++i) {
+    const int l = in.gt_labels[i];
+    if (l < 0 || static_cast<std::size_t>(l) >= primitives.size()) continue;
+    pcl::PointNormal pt = in.gt_points[i];
+    const Eigen::Vector3d n = in.gt_planes[static_cast<std::size_t>(l)].normal;
+    pt.normal_x = static_cast<float>(n.x());
+    pt.normal_y = static_cast<float>(n.y());
+    pt.normal_z = static_cast<float>(n.z());
+    primitives[static_cast<std::size_t>(l)].points.push_back(pt);
+  }
+  primitives.erase(std::remove_if(primitives.begin(), primitives.end(), [](const PlanarPrimitive& p) { return p.points.empty(); }),
+                   primitives.end());
+  return primitives;
+}
+
+// Assembles primitives and fills the output (mesh, status, times).
+[[maybe_unused]] void assemble(const std::vector<PlanarPrimitive>& primitives, const MethodOptions& options, MethodOutput& out) {
+  out.has_planes = true;
+  out.planes.clear();
+  for (const auto& p : primitives) out.planes.push_back(p.plane);
+#ifdef PACO_EVALUATION_WITH_ASSEMBLY
+  PolygonalAssembler assembler;
+  assembler.setBackend(options.assembler);
+  assembler.setTimeLimit(options.time_limit);
+  assembler.setInputPrimitives(primitives);
+  SurfaceMesh mesh;
+  const auto start = std::chrono::steady_clock::now();
+  const AssemblyResult& result = assembler.reconstruct(mesh);
+  out.seconds["assemble"] = secondsSince(start);
+  switch (result.status) {
+    case AssemblyStatus::Success:
+      out.has_mesh = true;
+      out.mesh = std::move(mesh);
+      if (result.hit_time_limit) out.message = "time limit hit; the best solution found was used";
+      break;
+    case AssemblyStatus::NotWatertight:
+      out.has_mesh = true;
+      out.mesh = std::move(mesh);
+      out.message = result.message;
+      break;
+    case AssemblyStatus::TimeLimit:
+      out.reason = FailureReason::TimeLimit;
+      out.message = result.message;
+      break;
+    case AssemblyStatus::Interrupted:
+      throw InterruptedError("assembly interrupted");
+    default:
+      out.reason = FailureReason::NoMesh;
+      out.message = toString(result.status) + ": " + result.message;
+      break;
+  }
+#else
+  (void)options;
+  throw InvalidInputError("this build has no paco::assembly");
+#endif
+}
+
+[[maybe_unused]] MethodOutput runDirect(const MethodInput& in, const MethodOptions& options) {
+  MethodOutput out;
+  assemble(visiblePrimitives(in, options, out), options, out);
+  return out;
+}
+
+[[maybe_unused]] MethodOutput runOracle(const MethodInput& in, const MethodOptions& options) {
+  MethodOutput out;
+  assemble(oraclePrimitives(in), options, out);
+  return out;
+}
+
+[[maybe_unused]] MethodOutput runBoxPrior(const MethodInput& in, const MethodOptions& options) {
+  MethodOutput out;
+  std::vector<PlanarPrimitive> visible = visiblePrimitives(in, options, out);
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<PlanarPrimitive> completed =
+      addBoundingBoxPrior(in.input, std::move(visible), options.prior_spacing, options.prior_empty_radius);
+  out.seconds["prior"] = secondsSince(start);
+  assemble(completed, options, out);
+  return out;
+}
+
+[[maybe_unused]] MethodOutput runPoissonQem(const MethodInput& in, const MethodOptions& options) {
+  MethodOutput out;
+  out.mesh = reconstructPoissonQem(in.input, options.qem_target_faces, &out.seconds);
+  out.has_mesh = !out.mesh.empty();
+  if (!out.has_mesh) {
+    out.reason = FailureReason::NoMesh;
+    out.message = "Poisson reconstruction produced no surface";
+  }
+  return out;
+}
+
+MethodOutput runSanity(const MethodInput&, const MethodOptions&) {
+  MethodOutput out;
+  out.reason = FailureReason::Sanity;
+  out.message = "every case is scored as the failure box";
+  return out;
+}
+
+void registerBuiltins(std::map<std::string, Entry>& r) {
+  static bool done = false;
+  if (done) return;
+  done = true;
+#ifdef PACO_EVALUATION_WITH_ASSEMBLY
+  r.emplace("direct", Entry{runDirect, true});
+  r.emplace("oracle", Entry{runOracle, true});
+  r.emplace("box-prior", Entry{runBoxPrior, true});
+#endif
+#ifdef PACO_EVALUATION_WITH_CGAL
+  r.emplace("poisson-qem", Entry{runPoissonQem, false});
+#endif
+  r.emplace("sanity", Entry{runSanity, false});
+}
+
+}  // namespace
+
+void registerMethod(const std::string& name, MethodFunction method, bool uses_assembler) {
+  std::lock_guard<std::mutex> lock(registryMutex());
+  registerBuiltins(registry());
+  registry()[name] = Entry{std::move(method), uses_assembler};
+}
+
+std::vector<std::string> availableMethods() {
+  std::lock_guard<std::mutex> lock(registryMutex());
+  registerBuiltins(registry());
+  std::vector<std::string> names;
+  for (const auto& [name, e] : registry()) names.push_back(name);
+  return names;
+}
+
+std::vector<std::string> knownMethods() { return {"direct", "oracle", "poisson-qem", "box-prior", "paco", "sanity"}; }
+
+bool methodUsesAssembler(const std::string& name) {
+  std::lock_guard<std::mutex> lock(registryMutex());
+  registerBuiltins(registry());
+  auto it = registry().find(name);
+  if (it != registry().end()) return it->second.uses_assembler;
+  return name != "poisson-qem" && name != "sanity";
+}
+
+MethodOutput runMethod(const std::string& name, const MethodInput& input, const MethodOptions& options) {
+  MethodFunction function;
+  {
+    std::lock_guard<std::mutex> lock(registryMutex());
+    registerBuiltins(registry());
+    auto it = registry().find(name);
+    if (it == registry().end()) {
+      std::string why = "method '" + name + "' is not available in this build";
+      if (name == "paco") why += ": it needs paco::completion (the learned stages); register it with registerMethod()";
+      else if (name == "direct" || name == "oracle" || name == "box-prior") why += ": it needs paco::assembly (and paco::segmentation)";
+      else if (name == "poisson-qem") why += ": it needs CGAL (PACO_WITH_CGAL=ON)";
+      else why += "; known methods: direct, oracle, poisson-qem, box-prior, paco, sanity";
+      throw InvalidInputError(why);
+    }
+    function = it->second.function;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  MethodOutput out;
+  try {
+    out = function(input, options);
+  } catch (const InterruptedError&) {
+    throw;
+  } catch (const std::exception& e) {
+    out = MethodOutput{};
+    out.reason = FailureReason::Threw;
+    out.message = e.what();
+  }
+  out.seconds["total"] = secondsSince(start);
+  return out;
+}
+
+std::vector<PlanarPrimitive> addBoundingBoxPrior(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                                 std::vector<PlanarPrimitive> visible, double spacing,
+                                                 double empty_radius) {
+  if (cloud.size() < 4) throw InvalidInputError("addBoundingBoxPrior: the cloud needs at least 4 points");
+  if (!(spacing > 0.0) || !(empty_radius > 0.0))
+    throw InvalidInputError("addBoundingBoxPrior: spacing and empty_radius must be > 0");
+  // Oriented bounding box from the principal axes of the points.
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(cloud.size());
+  for (const auto& p : cloud) points.push_back(p.getVector3fMap().cast<double>());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : points) centroid += p;
+  centroid /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const auto& p : points) covariance += (p - centroid) * (p - centroid).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  Eigen::Matrix3d axes = eigen.eigenvectors();
+  // CAD parts: align the box with the dominant visible planes rather than with the principal
+  // axes, which tilt by a few degrees whenever the visible part is not symmetric. The largest
+  // primitive gives the first axis, the largest one nearly perpendicular to it the second.
+  std::vector<std::size_t> by_size(visible.size());
+  for (std::size_t i = 0; i < by_size.size(); ++i) by_size[i] = i;
+  std::sort(by_size.begin(), by_size.end(),
+            [&](std::size_t a, std::size_t b) { return visible[a].points.size() > visible[b].points.size(); });
+  if (!by_size.empty()) {
+    const Eigen::Vector3d first = visible[by_size[0]].plane.normal.normalized();
+    for (std::size_t k = 1; k < by_size.size(); ++k) {
+      const Eigen::Vector3d n = visible[by_size[k]].plane.normal.normalized();
+      if (std::abs(n.dot(first)) > std::sin(10.0 * kPi / 180.0)) continue;
+      const Eigen::Vector3d second = (n - n.dot(first) * first).normalized();
+      axes.col(0) = first;
+      axes.col(1) = second;
+      axes.col(2) = first.cross(second);
+      break;
+    }
+  }
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const auto& p : points) {
+    const Eigen::Vector3d q = axes.transpose() * (p - centroid);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  const double diagonal = 1.0 / Normalization::fromBoundingBox(points).scale;
+  const double step = spacing * diagonal, radius = empty_radius * diagonal;
+
+  pcl::KdTreeFLANN<pcl::PointNormal> tree;
+  tree.setInputCloud(cloud.makeShared());
+  std::vector<int> index(1);
+  std::vector<float> squared(1);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d normal = (side ? 1.0 : -1.0) * axes.col(axis);
+      const double coordinate = side ? hi[axis] : lo[axis];
+      const Eigen::Vector3d on_plane = centroid + axes.col(axis) * coordinate;
+      const Plane plane = Plane::fromPointAndNormal(on_plane, normal);
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      pcl::PointCloud<pcl::PointNormal> added;
+      const int nu = std::max(1, static_cast<int>(std::ceil((hi[u] - lo[u]) / step)));
+      const int nv = std::max(1, static_cast<int>(std::ceil((hi[v] - lo[v]) / step)));
+      for (int i = 0; i <= nu; ++i) {
+        for (int j = 0; j <= nv; ++j) {
+          Eigen::Vector3d local;
+          local[axis] = coordinate;
+          local[u] = lo[u] + (hi[u] - lo[u]) * i / nu;
+          local[v] = lo[v] + (hi[v] - lo[v]) * j / nv;
+          const Eigen::Vector3d x = centroid + axes * local;
+          pcl::PointNormal pt;
+          pt.x = static_cast<float>(x.x());
+          pt.y = static_cast<float>(x.y());
+          pt.z = static_cast<float>(x.z());
+          pt.normal_x = static_cast<float>(normal.x());
+          pt.normal_y = static_cast<float>(normal.y());
+          pt.normal_z = static_cast<float>(normal.z());
+          if (tree.nearestKSearch(pt, 1, index, squared) > 0 && std::sqrt(squared[0]) <= radius) continue;
+          added.push_back(pt);
+        }
+      }
+      if (added.empty()) continue;
+      // Join a visible primitive on (nearly) the same plane, else add the box face as a new one.
+      PlanarPrimitive* host = nullptr;
+      for (auto& p : visible) {
+        if (p.plane.normal.dot(normal) < std::cos(10.0 * kPi / 180.0)) continue;
+        if (std::abs(p.plane.signedDistance(on_plane)) > 0.02 * diagonal) continue;
+        host = &p;
+        break;
+      }
+      if (host) {
+        for (auto pt : added) {
+          const Eigen::Vector3d projected = host->plane.project(pt.getVector3fMap().cast<double>());
+          pt.x = static_cast<float>(projected.x());
+          pt.y = static_cast<float>(projected.y());
+          pt.z = static_cast<float>(projected.z());
+          host->points.push_back(pt);
+        }
+      } else {
+        PlanarPrimitive prior;
+        prior.plane = plane;
+        prior.points = std::move(added);
+        prior.confidence = 0.5f;
+        visible.push_back(std::move(prior));
+      }
+    }
+  }
+  return visible;
+}
+
+}  // namespace paco::evaluation

@@ -1,0 +1,325 @@
+#include <paco/evaluation/report.h>
+
+#include <paco/common/error.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace paco::evaluation {
+
+namespace {
+
+const std::vector<std::pair<FailureReason, const char*>>& reasonNames() {
+  static const std::vector<std::pair<FailureReason, const char*>> names = {
+      {FailureReason::None, "none"},          {FailureReason::NoMesh, "no-mesh"},
+      {FailureReason::EmptyMesh, "empty"},    {FailureReason::NotClosed, "not-closed"},
+      {FailureReason::NotManifold, "not-manifold"}, {FailureReason::NotOriented, "not-oriented"},
+      {FailureReason::TimeLimit, "time-limit"}, {FailureReason::Threw, "threw"},
+      {FailureReason::Sanity, "sanity"}};
+  return names;
+}
+
+std::string formatNumber(double value, int precision = 6) {
+  if (std::isnan(value)) return "";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*g", precision, value);
+  return buffer;
+}
+
+std::string quote(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string q = "\"";
+  for (char c : text) {
+    if (c == '"') q += "\"\"";
+    else if (c == '\n' || c == '\r') q += ' ';
+    else q += c;
+  }
+  return q + "\"";
+}
+
+// Splits one CSV line (RFC 4180 quoting, no embedded newlines). Returns false on an unclosed quote.
+bool splitCsv(const std::string& line, std::vector<std::string>& fields) {
+  fields.clear();
+  std::string field;
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') { field += '"'; ++i; }
+      else if (c == '"') quoted = false;
+      else field += c;
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.push_back(field);
+      field.clear();
+    } else {
+      field += c;
+    }
+  }
+  fields.push_back(field);
+  return !quoted;
+}
+
+double parseNumber(const std::string& text) {
+  if (text.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::size_t used = 0;
+  const double v = std::stod(text, &used);
+  if (used != text.size()) throw std::invalid_argument("trailing characters");
+  return v;
+}
+
+const char* kFixedColumns[] = {"method", "assembler", "part", "level", "view", "status", "reason",
+                               "cd", "hd", "nc", "nc_prim", "unmatched_pred", "faces", "vertices",
+                               "closed", "volume_ratio"};
+constexpr std::size_t kNumFixed = sizeof(kFixedColumns) / sizeof(kFixedColumns[0]);
+
+double mean(const std::vector<double>& v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  double s = 0.0;
+  for (double x : v) s += x;
+  return s / static_cast<double>(v.size());
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string cell(double value, int decimals) {
+  if (std::isnan(value) || value < -0.5) return "–";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
+  return buffer;
+}
+
+const char* levelName(int level) {
+  switch (level) {
+    case 0: return "Simple (25 % missing)";
+    case 1: return "Moderate (50 % missing)";
+    case 2: return "Hard (75 % missing)";
+    default: return "Level";
+  }
+}
+
+std::string table(const std::vector<EvaluationRecord>& records) {
+  // Rows in order of first appearance of (method, assembler); sanity last.
+  std::vector<std::pair<std::string, std::string>> order;
+  std::map<std::pair<std::string, std::string>, std::vector<EvaluationRecord>> groups;
+  std::set<std::string> stages_seen;
+  for (const auto& r : records) {
+    const auto k = std::make_pair(r.method, r.assembler);
+    if (!groups.count(k)) order.push_back(k);
+    groups[k].push_back(r);
+    for (const auto& [stage, s] : r.seconds) if (stage != "total") stages_seen.insert(stage);
+  }
+  std::stable_partition(order.begin(), order.end(), [](const auto& k) { return k.first != "sanity"; });
+  std::vector<std::string> stages;
+  for (const auto& s : stageNames()) if (stages_seen.count(s)) stages.push_back(s);
+
+  std::ostringstream md;
+  md << "| Method | Assembler | N | FR % | CD | HD | NC | NC_prim | unmatched pred | CD closed | HD closed | "
+        "vol. ratio (median) | #f | #v | failures by reason |";
+  for (const auto& s : stages) md << " t " << s << " (s) |";
+  md << " t total (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+  for (std::size_t i = 0; i < stages.size(); ++i) md << "---|";
+  md << "---|\n";
+  for (const auto& k : order) {
+    const Summary s = summarize(groups[k]);
+    std::string reasons;
+    for (const auto& [reason, n] : s.failures_by_reason) {
+      if (!reasons.empty()) reasons += ", ";
+      reasons += toString(reason) + " " + std::to_string(n);
+    }
+    if (reasons.empty()) reasons = "–";
+    md << "| " << k.first << " | " << k.second << " | " << s.count << " | " << cell(s.failureRate(), 1) << " | "
+       << cell(s.chamfer, 2) << " | " << cell(s.hausdorff, 2) << " | " << cell(s.normal_consistency, 3) << " | "
+       << cell(s.nc_prim, 3) << " | " << cell(s.unmatched_predicted, 1) << " | " << cell(s.closed_chamfer, 2) << " | "
+       << cell(s.closed_hausdorff, 2) << " | " << cell(s.volume_ratio_median, 3) << " | "
+       << (s.failures < s.count ? cell(s.faces, 1) : "–") << " | "
+       << (s.failures < s.count ? cell(s.vertices, 1) : "–") << " | " << reasons << " |";
+    for (const auto& stage : stages) {
+      auto it = s.mean_seconds.find(stage);
+      md << " " << (it == s.mean_seconds.end() ? std::string("–") : cell(it->second, 3)) << " |";
+    }
+    auto total = s.mean_seconds.find("total");
+    md << " " << (total == s.mean_seconds.end() ? std::string("–") : cell(total->second, 3)) << " |\n";
+  }
+  return md.str();
+}
+
+}  // namespace
+
+std::string toString(FailureReason reason) {
+  for (const auto& [r, name] : reasonNames())
+    if (r == reason) return name;
+  return "unknown";
+}
+
+FailureReason failureReasonFromString(const std::string& name) {
+  for (const auto& [r, n] : reasonNames())
+    if (name == n) return r;
+  throw InvalidInputError("unknown failure reason '" + name + "'");
+}
+
+FailureReason classifyMesh(const SurfaceMesh& mesh) {
+  if (mesh.faces.empty() || mesh.vertices.empty()) return FailureReason::EmptyMesh;
+  try {
+    mesh.validate();
+    if (!(surfaceArea(mesh) > 0.0)) return FailureReason::EmptyMesh;
+  } catch (const Error&) {
+    return FailureReason::EmptyMesh;
+  }
+  const MeshTopology t = analyseTopology(mesh);
+  if (!t.isManifold()) return FailureReason::NotManifold;
+  if (!t.isClosed()) return FailureReason::NotClosed;
+  if (!t.isOriented()) return FailureReason::NotOriented;
+  return FailureReason::None;
+}
+
+std::string EvaluationRecord::key() const {
+  return method + "|" + assembler + "|" + part + "|" + std::to_string(level) + "|" + std::to_string(view);
+}
+
+const std::vector<std::string>& stageNames() {
+  static const std::vector<std::string> names = {"segment", "complete", "prior", "reconstruct", "simplify",
+                                                 "assemble", "evaluate", "total"};
+  return names;
+}
+
+std::string csvHeader() {
+  std::string h;
+  for (std::size_t i = 0; i < kNumFixed; ++i) h += (i ? "," : "") + std::string(kFixedColumns[i]);
+  for (const auto& s : stageNames()) h += ",t_" + s;
+  return h + ",message";
+}
+
+void appendRecord(std::ostream& out, const EvaluationRecord& r) {
+  out << quote(r.method) << ',' << quote(r.assembler) << ',' << quote(r.part) << ',' << r.level << ',' << r.view << ','
+      << (r.failed() ? "failed" : "ok") << ',' << toString(r.reason) << ',' << formatNumber(r.chamfer, 9) << ','
+      << formatNumber(r.hausdorff, 9) << ',' << formatNumber(r.normal_consistency, 9) << ','
+      << (r.nc_prim < 0 ? std::string() : formatNumber(r.nc_prim, 9)) << ','
+      << (r.unmatched_predicted < 0 ? std::string() : std::to_string(r.unmatched_predicted)) << ',' << r.num_faces
+      << ',' << r.num_vertices << ',' << (r.failed() ? 0 : 1) << ',' << formatNumber(r.volume_ratio, 9);
+  for (const auto& s : stageNames()) {
+    auto it = r.seconds.find(s);
+    out << ',' << (it == r.seconds.end() ? std::string() : formatNumber(it->second, 6));
+  }
+  out << ',' << quote(r.message) << '\n';
+}
+
+std::vector<EvaluationRecord> readRecords(const std::string& path, std::size_t* skipped_lines) {
+  std::vector<EvaluationRecord> records;
+  if (skipped_lines) *skipped_lines = 0;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return records;
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.empty()) return records;
+  std::istringstream lines(text);
+  std::string line;
+  std::getline(lines, line);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != csvHeader())
+    throw IoError("'" + path + "' is not a paco_eval CSV of this version (its header differs); "
+                  "choose another output folder or delete the file to start over");
+  const bool ends_with_newline = text.back() == '\n';
+  std::vector<std::string> f;
+  const std::size_t expected = kNumFixed + stageNames().size() + 1;
+  while (std::getline(lines, line)) {
+    // A last line without its newline was cut by an interruption.
+    if (lines.eof() && !ends_with_newline) {
+      if (skipped_lines) ++*skipped_lines;
+      break;
+    }
+    if (line.empty()) continue;
+    if (!splitCsv(line, f) || f.size() != expected) {
+      if (skipped_lines) ++*skipped_lines;
+      continue;
+    }
+    try {
+      EvaluationRecord r;
+      r.method = f[0];
+      r.assembler = f[1];
+      r.part = f[2];
+      r.level = std::stoi(f[3]);
+      r.view = std::stoi(f[4]);
+      r.reason = failureReasonFromString(f[6]);
+      r.chamfer = parseNumber(f[7]);
+      r.hausdorff = parseNumber(f[8]);
+      r.normal_consistency = parseNumber(f[9]);
+      r.nc_prim = f[10].empty() ? -1.0 : parseNumber(f[10]);
+      r.unmatched_predicted = f[11].empty() ? -1 : std::stoi(f[11]);
+      r.num_faces = static_cast<std::size_t>(std::stoull(f[12]));
+      r.num_vertices = static_cast<std::size_t>(std::stoull(f[13]));
+      r.volume_ratio = parseNumber(f[15]);
+      for (std::size_t i = 0; i < stageNames().size(); ++i)
+        if (!f[kNumFixed + i].empty()) r.seconds[stageNames()[i]] = parseNumber(f[kNumFixed + i]);
+      r.message = f.back();
+      records.push_back(std::move(r));
+    } catch (const std::exception&) {
+      if (skipped_lines) ++*skipped_lines;
+    }
+  }
+  return records;
+}
+
+Summary summarize(const std::vector<EvaluationRecord>& records) {
+  Summary s;
+  s.count = records.size();
+  std::vector<double> cd, hd, nc, prim, unmatched, ccd, chd, faces, vertices, volume;
+  std::map<std::string, std::vector<double>> times;
+  for (const auto& r : records) {
+    cd.push_back(r.chamfer);
+    hd.push_back(r.hausdorff);
+    nc.push_back(r.normal_consistency);
+    if (r.nc_prim >= 0) prim.push_back(r.nc_prim);
+    if (r.unmatched_predicted >= 0) unmatched.push_back(r.unmatched_predicted);
+    for (const auto& [stage, t] : r.seconds) times[stage].push_back(t);
+    if (r.failed()) {
+      ++s.failures;
+      ++s.failures_by_reason[r.reason];
+    } else {
+      ccd.push_back(r.chamfer);
+      chd.push_back(r.hausdorff);
+      faces.push_back(static_cast<double>(r.num_faces));
+      vertices.push_back(static_cast<double>(r.num_vertices));
+      if (!std::isnan(r.volume_ratio)) volume.push_back(r.volume_ratio);
+    }
+  }
+  const auto orMinus = [](double v) { return std::isnan(v) ? -1.0 : v; };
+  s.chamfer = orMinus(mean(cd));
+  s.hausdorff = orMinus(mean(hd));
+  s.normal_consistency = orMinus(mean(nc));
+  s.nc_prim = orMinus(mean(prim));
+  s.unmatched_predicted = orMinus(mean(unmatched));
+  s.closed_chamfer = orMinus(mean(ccd));
+  s.closed_hausdorff = orMinus(mean(chd));
+  s.faces = faces.empty() ? 0.0 : mean(faces);
+  s.vertices = vertices.empty() ? 0.0 : mean(vertices);
+  s.volume_ratio_median = median(volume);
+  for (const auto& [stage, v] : times) s.mean_seconds[stage] = mean(v);
+  return s;
+}
+
+std::string markdownReport(const std::vector<EvaluationRecord>& records, const std::string& title,
+                           const std::string& notes) {
+  std::ostringstream md;
+  md << "# " << title << "\n\n";
+  if (!notes.empty()) md << notes << (notes.back() == '\n' ? "\n" : "\n\n");
+  md << "CD and HD are x 100 in the GT's normalised frame (unit bounding-box diagonal); a failed case is "
+        "scored as the GT's normalised bounding box. FR is the failure rate in %. \"CD/HD closed\" average "
+        "the succeeded cases only. Times are mean wall seconds per case.\n\n";
+  std::map<int, std::vector<EvaluationRecord>> by_level;
+  for (const auto& r : records) by_level[r.level].push_back(r);
+  for (const auto& [level, rs] : by_level) md << "## " << levelName(level) << "\n\n" << table(rs) << "\n";
+  if (by_level.size() > 1 || by_level.empty()) md << "## Overall\n\n" << table(records) << "\n";
+  return md.str();
+}
+
+}  // namespace paco::evaluation

@@ -1,0 +1,126 @@
+// Dataset mode on a tiny dataset written here: rows, failure scores, resume, tables.
+#include <paco/common/error.h>
+#include <paco/common/progress.h>
+#include <paco/data/builder.h>
+#include <paco/evaluation/benchmark.h>
+#include <paco/evaluation/metrics.h>
+
+#include <shapes.h>
+#include <test_support.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+namespace ev = paco::evaluation;
+
+namespace {
+
+// Three parts named so that they fall in one split; returns that split's name.
+std::string writeDataset(const std::string& folder) {
+  paco::data::BuildOptions options;
+  options.info.levels = {0, 2};
+  options.info.views = 1;
+  options.info.source = "test shapes";
+  paco::data::DatasetWriter writer(folder, options.info);
+  const std::vector<paco::SurfaceMesh> meshes = {paco::test::makeLBracket(), paco::test::makeChamferedCube(),
+                                                 paco::test::makeBossOnSlab()};
+  // Pick names in the validation split (FNV-1a bucket 80..89).
+  std::vector<std::string> names;
+  for (int i = 0; names.size() < meshes.size(); ++i) {
+    const std::string name = "shape-" + std::to_string(i);
+    if (paco::data::splitOf(name) == paco::data::Split::Val) names.push_back(name);
+  }
+  for (std::size_t i = 0; i < meshes.size(); ++i) writer.write(paco::data::buildPart(names[i], meshes[i], options));
+  return "val";
+}
+
+}  // namespace
+
+TEST(Benchmark, WritesOneRowPerCaseScoresFailuresAsTheBoxAndResumes) {
+  paco::test::TempDir dir;
+  const std::string split = writeDataset(dir.file("ds"));
+  ev::BenchmarkOptions options;
+  options.dataset = dir.file("ds");
+  options.split = split;
+  options.methods = {"sanity"};
+  const auto available = ev::availableMethods();
+  const bool assemble = std::find(available.begin(), available.end(), "oracle") != available.end();
+  if (assemble) options.methods.push_back("oracle");
+  options.assemblers = {"cell-complex"};
+  options.levels = {0, 2};
+  options.limit = 2;
+  options.jobs = 2;
+  options.output_dir = dir.file("out");
+  options.progress = false;
+  options.metrics.num_samples = 2000;
+  paco::setInterruptRequested(false);
+
+  const ev::BenchmarkRun first = ev::runBenchmark(options);
+  const std::size_t cases = 2 /*parts*/ * 2 /*levels*/ * options.methods.size();
+  EXPECT_EQ(first.cases_total, cases);
+  EXPECT_EQ(first.cases_evaluated, cases);
+  EXPECT_EQ(first.cases_resumed, 0u);
+  EXPECT_FALSE(first.interrupted);
+
+  const auto records = ev::readRecords(first.csv_path);
+  ASSERT_EQ(records.size(), cases);
+  std::set<std::string> parts;
+  for (const auto& r : records) {
+    parts.insert(r.part);
+    if (r.method == "sanity") {
+      EXPECT_EQ(r.reason, ev::FailureReason::Sanity);
+      EXPECT_EQ(r.assembler, "-");
+      EXPECT_GT(r.chamfer, 0.0);
+      EXPECT_GT(r.hausdorff, r.chamfer);
+    } else {  // oracle
+      // The oracle gets the exact GT planes: NC_prim is 1 and, when it closes, it is near the GT.
+      EXPECT_NEAR(r.nc_prim, 1.0, 1e-9);
+      if (!r.failed()) {
+        EXPECT_LT(r.chamfer, 5.0) << r.part;
+      }
+    }
+  }
+  EXPECT_EQ(parts.size(), 2u);
+  // Sanity rows of one sample equal evaluateFailure on its GT mesh: identical across levels of a part.
+  for (const auto& a : records)
+    for (const auto& b : records)
+      if (a.method == "sanity" && b.method == "sanity" && a.part == b.part) {
+        EXPECT_EQ(a.chamfer, b.chamfer);
+      }
+
+  const std::string md = paco::test::readBytes(first.report_path);
+  EXPECT_NE(md.find("## Simple (25 % missing)"), std::string::npos);
+  EXPECT_NE(md.find("## Hard (75 % missing)"), std::string::npos);
+  EXPECT_NE(md.find("| sanity | - | 2 | 100.0 |"), std::string::npos) << md;
+
+  // A second run finds everything done.
+  const ev::BenchmarkRun second = ev::runBenchmark(options);
+  EXPECT_EQ(second.cases_evaluated, 0u);
+  EXPECT_EQ(second.cases_resumed, cases);
+  EXPECT_EQ(ev::readRecords(second.csv_path).size(), cases);
+
+  // A new method is added to the same CSV.
+  options.methods = {"sanity", "poisson-qem"};
+  if (std::find(available.begin(), available.end(), "poisson-qem") != available.end()) {
+    options.limit = 1;
+    const ev::BenchmarkRun third = ev::runBenchmark(options);
+    EXPECT_EQ(third.cases_evaluated, 2u);
+    EXPECT_EQ(ev::readRecords(third.csv_path).size(), cases + 2);
+  }
+}
+
+TEST(Benchmark, BadOptionsAreErrors) {
+  paco::test::TempDir dir;
+  ev::BenchmarkOptions options;
+  options.dataset = dir.file("nothing");
+  options.output_dir = dir.file("out");
+  options.methods = {"no-such-method"};
+  EXPECT_THROW(ev::runBenchmark(options), paco::InvalidInputError);
+  options.methods = {"sanity"};
+  options.levels = {3};
+  EXPECT_THROW(ev::runBenchmark(options), paco::InvalidInputError);
+  options.levels = {0};
+  EXPECT_THROW(ev::runBenchmark(options), paco::IoError);  // no dataset there
+}

@@ -1,0 +1,113 @@
+// The baselines that need no other paco module: sanity, poisson-qem, the box prior, the registry.
+#include <paco/common/error.h>
+#include <paco/evaluation/methods.h>
+#include <paco/evaluation/metrics.h>
+
+#include <shapes.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace ev = paco::evaluation;
+
+namespace {
+
+pcl::PointCloud<pcl::PointNormal> sampleCloud(const paco::SurfaceMesh& mesh, std::size_t count, std::uint64_t seed) {
+  const paco::SurfaceSample s = paco::sampleSurface(mesh, count, seed);
+  pcl::PointCloud<pcl::PointNormal> cloud;
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    pcl::PointNormal p;
+    p.getVector3fMap() = s.points[i].cast<float>();
+    p.getNormalVector3fMap() = s.normals[i].cast<float>();
+    cloud.push_back(p);
+  }
+  return cloud;
+}
+
+bool has(const std::vector<std::string>& names, const std::string& name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+}  // namespace
+
+TEST(Methods, SanityFailsEveryCaseOnPurpose) {
+  const ev::MethodOutput out = ev::runMethod("sanity", ev::MethodInput{}, ev::MethodOptions{});
+  EXPECT_EQ(out.reason, ev::FailureReason::Sanity);
+  EXPECT_FALSE(out.has_mesh);
+  EXPECT_FALSE(ev::methodUsesAssembler("sanity"));
+  EXPECT_FALSE(ev::methodUsesAssembler("poisson-qem"));
+  EXPECT_TRUE(ev::methodUsesAssembler("direct"));
+}
+
+TEST(Methods, UnknownOrUnbuiltMethodSaysWhy) {
+  try {
+    ev::runMethod("paco", ev::MethodInput{}, ev::MethodOptions{});
+    if (!has(ev::availableMethods(), "paco")) FAIL() << "expected an error";
+  } catch (const paco::InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("paco::completion"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ev::runMethod("nonsense", ev::MethodInput{}, ev::MethodOptions{}), paco::InvalidInputError);
+}
+
+TEST(Methods, RegisteredMethodRunsAndItsExceptionBecomesAFailure) {
+  ev::registerMethod(
+      "test-throws", [](const ev::MethodInput&, const ev::MethodOptions&) -> ev::MethodOutput {
+        throw paco::InvalidInputError("broken on purpose");
+      },
+      false);
+  EXPECT_TRUE(has(ev::availableMethods(), "test-throws"));
+  const ev::MethodOutput out = ev::runMethod("test-throws", ev::MethodInput{}, ev::MethodOptions{});
+  EXPECT_EQ(out.reason, ev::FailureReason::Threw);
+  EXPECT_EQ(out.message, "broken on purpose");
+  EXPECT_TRUE(out.seconds.count("total"));
+}
+
+TEST(PoissonQem, ReconstructsABoxWithTheTargetFaceCount) {
+  if (!has(ev::availableMethods(), "poisson-qem")) GTEST_SKIP() << "built without CGAL";
+  const paco::SurfaceMesh box = paco::test::makeBox({-0.3, -0.25, -0.2}, {0.3, 0.25, 0.2});
+  ev::MethodInput in;
+  in.input = sampleCloud(box, 2048, 3);
+  ev::MethodOptions options;
+  options.qem_target_faces = 40;
+  const ev::MethodOutput out = ev::runMethod("poisson-qem", in, options);
+  ASSERT_TRUE(out.has_mesh) << out.message;
+  EXPECT_EQ(out.reason, ev::FailureReason::None);
+  EXPECT_LE(out.mesh.faces.size(), 44u);
+  EXPECT_GE(out.mesh.faces.size(), 12u);
+  EXPECT_TRUE(out.seconds.count("reconstruct"));
+  EXPECT_TRUE(out.seconds.count("simplify"));
+  const ev::MeshMetrics m = ev::evaluateMesh(out.mesh, box);
+  EXPECT_LT(m.chamfer, 6.0);  // a rounded box: well below the failure box of a non-box part
+  EXPECT_GT(m.normal_consistency, 0.85);
+  EXPECT_THROW(ev::reconstructPoissonQem(pcl::PointCloud<pcl::PointNormal>{}, 40), paco::InvalidInputError);
+}
+
+TEST(BoxPrior, FillsTheMissingFaceOfABox) {
+  // A box seen without its top: the five visible faces as primitives; the prior must add points
+  // on the top face (z = 0.2), and only there.
+  const paco::SurfaceMesh box = paco::test::makeBox({-0.3, -0.25, -0.2}, {0.3, 0.25, 0.2});
+  pcl::PointCloud<pcl::PointNormal> all = sampleCloud(box, 4000, 5), seen;
+  for (const auto& p : all)
+    if (p.z < 0.2f - 1e-6f) seen.push_back(p);
+  std::vector<paco::PlanarPrimitive> visible;
+  for (const Eigen::Vector3d& n : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(-1, 0, 0), Eigen::Vector3d(0, 1, 0),
+                                   Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, -1)}) {
+    paco::PlanarPrimitive prim;
+    for (const auto& p : seen)
+      if (p.getNormalVector3fMap().cast<double>().dot(n) > 0.99) prim.points.push_back(p);
+    prim.plane = paco::Plane::fromPointAndNormal(prim.points[0].getVector3fMap().cast<double>(), n);
+    visible.push_back(prim);
+  }
+  std::size_t before = 0;
+  for (const auto& p : visible) before += p.points.size();
+  const auto completed = ev::addBoundingBoxPrior(seen, visible);
+  ASSERT_EQ(completed.size(), 6u);
+  const paco::PlanarPrimitive& top = completed.back();
+  EXPECT_GT(std::abs(top.plane.normal.z()), 0.99);
+  EXPECT_GT(top.points.size(), 100u);
+  for (const auto& p : top.points) EXPECT_NEAR(p.z, 0.2, 0.01);
+  std::size_t after = 0;
+  for (std::size_t i = 0; i < 5; ++i) after += completed[i].points.size();
+  EXPECT_EQ(after, before);  // the observed faces had no empty parts
+}

@@ -1,0 +1,79 @@
+// paco_eval single mode on good and bad input.
+#include <paco/io/mesh_io.h>
+
+#include <shapes.h>
+#include <test_support.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace {
+
+bool toolBuilt() { return std::filesystem::exists(paco::test::toolPath("paco_eval")); }
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+}  // namespace
+
+TEST(PacoEvalTool, SingleModePrintsTheMetrics) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_eval is not built";
+  paco::test::TempDir dir;
+  paco::io::saveMesh(dir.file("gt.obj"), paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  paco::io::saveMesh(dir.file("pred.off"), paco::test::makeBox({0.1, 0, 0}, {1.1, 1, 1}));
+  std::string out;
+  ASSERT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --pred " + quoted(dir.file("pred.off")) +
+                                       " --gt " + quoted(dir.file("gt.obj")) + " --same-seed",
+                                   &out),
+            0)
+      << out;
+  for (const char* field : {"CD=", "HD=", "NC=", "#f=6", "#v=8", "closed=yes", "volume_ratio=1"})
+    EXPECT_NE(out.find(field), std::string::npos) << field << " missing in: " << out;
+  // HD of the shifted cube is 0.1 / sqrt(3) x 100 = 5.77 (see test_metrics.cpp).
+  const auto hd = out.find("HD=");
+  EXPECT_NEAR(std::stod(out.substr(hd + 3)), 5.77, 0.6) << out;
+}
+
+TEST(PacoEvalTool, ScoreFailurePrintsTheBoxAndTheFloor) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_eval is not built";
+  paco::test::TempDir dir;
+  // A box-shaped GT is its own failure box: both lines are at the sampling floor.
+  paco::io::saveMesh(dir.file("gt.obj"), paco::test::makeBox({0, 0, 0}, {2, 1, 1}));
+  std::string out;
+  ASSERT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --gt " + quoted(dir.file("gt.obj")) +
+                                       " --score-failure",
+                                   &out),
+            0)
+      << out;
+  const auto failure = out.find("failure: CD="), floor = out.find("floor: CD=");
+  ASSERT_NE(failure, std::string::npos) << out;
+  ASSERT_NE(floor, std::string::npos) << out;
+  EXPECT_LT(std::stod(out.substr(failure + 12)), 2.0) << out;
+  EXPECT_LT(std::stod(out.substr(floor + 10)), 2.0) << out;
+}
+
+TEST(PacoEvalTool, SingleModeRejectsBadInput) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_eval is not built";
+  paco::test::TempDir dir;
+  paco::io::saveMesh(dir.file("gt.obj"), paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  std::string out;
+  EXPECT_NE(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --pred " + quoted(dir.file("missing.obj")) +
+                                       " --gt " + quoted(dir.file("gt.obj")),
+                                   &out),
+            0);
+  EXPECT_NE(out.find("missing.obj"), std::string::npos) << out;
+  // A mesh with vertices but no faces.
+  paco::test::writeBytes(dir.file("points.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  EXPECT_NE(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --pred " + quoted(dir.file("points.obj")) +
+                                       " --gt " + quoted(dir.file("gt.obj")),
+                                   &out),
+            0);
+  EXPECT_NE(out.find("error"), std::string::npos) << out;
+  // Garbage.
+  paco::test::writeBytes(dir.file("junk.ply"), "this is not a ply file");
+  EXPECT_NE(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --pred " + quoted(dir.file("junk.ply")) +
+                                       " --gt " + quoted(dir.file("gt.obj")),
+                                   &out),
+            0);
+  // Neither mode chosen: a usage error.
+  EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval"), &out), 2) << out;
+}

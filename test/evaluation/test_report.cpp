@@ -1,0 +1,148 @@
+// Failure classification, the CSV (with resume after an interruption) and the Markdown tables.
+#include <paco/common/error.h>
+#include <paco/evaluation/report.h>
+
+#include <shapes.h>
+#include <test_support.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace ev = paco::evaluation;
+
+TEST(ClassifyMesh, NamesEachDefect) {
+  const paco::SurfaceMesh box = paco::test::makeBox({0, 0, 0}, {1, 1, 1});
+  EXPECT_EQ(ev::classifyMesh(box), ev::FailureReason::None);
+  EXPECT_EQ(ev::classifyMesh(paco::SurfaceMesh{}), ev::FailureReason::EmptyMesh);
+
+  paco::SurfaceMesh open = box;
+  open.faces.pop_back();
+  EXPECT_EQ(ev::classifyMesh(open), ev::FailureReason::NotClosed);
+
+  paco::SurfaceMesh flipped = box;
+  std::reverse(flipped.faces[0].begin(), flipped.faces[0].end());
+  EXPECT_EQ(ev::classifyMesh(flipped), ev::FailureReason::NotOriented);
+
+  paco::SurfaceMesh fin = box;  // a third face on the edge (0,1): non-manifold
+  fin.vertices.emplace_back(0.5, -1.0, 0.0);
+  fin.faces.push_back({0, 1, static_cast<std::uint32_t>(fin.vertices.size() - 1)});
+  EXPECT_EQ(ev::classifyMesh(fin), ev::FailureReason::NotManifold);
+
+  paco::SurfaceMesh flat;  // faces without area
+  flat.vertices = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  flat.faces = {{0, 1, 2}};
+  EXPECT_EQ(ev::classifyMesh(flat), ev::FailureReason::EmptyMesh);
+}
+
+TEST(FailureReason, NamesRoundTrip) {
+  for (auto r : {ev::FailureReason::None, ev::FailureReason::NoMesh, ev::FailureReason::EmptyMesh,
+                 ev::FailureReason::NotClosed, ev::FailureReason::NotManifold, ev::FailureReason::NotOriented,
+                 ev::FailureReason::TimeLimit, ev::FailureReason::Threw, ev::FailureReason::Sanity})
+    EXPECT_EQ(ev::failureReasonFromString(ev::toString(r)), r);
+  EXPECT_THROW(ev::failureReasonFromString("bogus"), paco::InvalidInputError);
+}
+
+namespace {
+
+ev::EvaluationRecord record(const std::string& method, const std::string& part, int level, ev::FailureReason reason,
+                            double cd, double hd, double nc) {
+  ev::EvaluationRecord r;
+  r.method = method;
+  r.assembler = "polyfit";
+  r.part = part;
+  r.level = level;
+  r.reason = reason;
+  r.chamfer = cd;
+  r.hausdorff = hd;
+  r.normal_consistency = nc;
+  if (reason == ev::FailureReason::None) {
+    r.num_faces = 10;
+    r.num_vertices = 16;
+    r.volume_ratio = 0.8;
+  }
+  r.seconds = {{"assemble", 0.5}, {"total", 1.0}};
+  return r;
+}
+
+}  // namespace
+
+TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
+  paco::test::TempDir dir;
+  const std::string path = dir.file("eval.csv");
+  ev::EvaluationRecord a = record("direct", "part,with \"comma\"", 2, ev::FailureReason::NotClosed, 6.0, 23.7, 0.753);
+  a.nc_prim = 0.9;
+  a.unmatched_predicted = 2;
+  a.message = "3 boundary edges";
+  const ev::EvaluationRecord b = record("oracle", "p2", 0, ev::FailureReason::None, 1.61, 3.45, 0.957);
+  {
+    std::ofstream out(path);
+    out << ev::csvHeader() << '\n';
+    ev::appendRecord(out, a);
+    ev::appendRecord(out, b);
+    out << "oracle,polyfit,p3,1,0,ok,none,1.2";  // cut mid-line, no newline
+  }
+  std::size_t skipped = 0;
+  const auto records = ev::readRecords(path, &skipped);
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(skipped, 1u);
+  EXPECT_EQ(records[0].part, a.part);
+  EXPECT_EQ(records[0].reason, ev::FailureReason::NotClosed);
+  EXPECT_DOUBLE_EQ(records[0].chamfer, 6.0);
+  EXPECT_DOUBLE_EQ(records[0].nc_prim, 0.9);
+  EXPECT_EQ(records[0].unmatched_predicted, 2);
+  EXPECT_EQ(records[0].message, a.message);
+  EXPECT_TRUE(std::isnan(records[0].volume_ratio));
+  EXPECT_EQ(records[1].key(), b.key());
+  EXPECT_DOUBLE_EQ(records[1].volume_ratio, 0.8);
+  EXPECT_DOUBLE_EQ(records[1].seconds.at("assemble"), 0.5);
+  EXPECT_EQ(records[1].nc_prim, -1.0);
+
+  EXPECT_TRUE(ev::readRecords(dir.file("missing.csv")).empty());
+  paco::test::writeBytes(dir.file("other.csv"), "a,b,c\n1,2,3\n");
+  EXPECT_THROW(ev::readRecords(dir.file("other.csv")), paco::IoError);
+}
+
+TEST(Summary, FailureRateClosedOnlyFiguresAndReasons) {
+  const std::vector<ev::EvaluationRecord> rs = {
+      record("direct", "a", 0, ev::FailureReason::None, 2.0, 4.0, 0.9),
+      record("direct", "b", 0, ev::FailureReason::None, 4.0, 8.0, 0.8),
+      record("direct", "c", 0, ev::FailureReason::NotClosed, 6.0, 24.0, 0.75),
+      record("direct", "d", 0, ev::FailureReason::TimeLimit, 8.0, 20.0, 0.7)};
+  const ev::Summary s = ev::summarize(rs);
+  EXPECT_EQ(s.count, 4u);
+  EXPECT_EQ(s.failures, 2u);
+  EXPECT_DOUBLE_EQ(s.failureRate(), 50.0);
+  EXPECT_DOUBLE_EQ(s.chamfer, 5.0);
+  EXPECT_DOUBLE_EQ(s.hausdorff, 14.0);
+  EXPECT_DOUBLE_EQ(s.normal_consistency, (0.9 + 0.8 + 0.75 + 0.7) / 4.0);
+  EXPECT_DOUBLE_EQ(s.closed_chamfer, 3.0);
+  EXPECT_DOUBLE_EQ(s.closed_hausdorff, 6.0);
+  EXPECT_DOUBLE_EQ(s.faces, 10.0);
+  EXPECT_DOUBLE_EQ(s.volume_ratio_median, 0.8);
+  EXPECT_EQ(s.failures_by_reason.at(ev::FailureReason::NotClosed), 1u);
+  EXPECT_EQ(s.failures_by_reason.at(ev::FailureReason::TimeLimit), 1u);
+  EXPECT_DOUBLE_EQ(s.mean_seconds.at("assemble"), 0.5);
+}
+
+TEST(Markdown, OneTablePerLevelAndOverall) {
+  std::vector<ev::EvaluationRecord> rs = {record("direct", "a", 0, ev::FailureReason::None, 2.0, 4.0, 0.9),
+                                          record("direct", "a", 2, ev::FailureReason::NoMesh, 6.0, 24.0, 0.75),
+                                          record("sanity", "a", 0, ev::FailureReason::Sanity, 6.0, 24.0, 0.75),
+                                          record("oracle", "a", 2, ev::FailureReason::None, 1.6, 3.4, 0.95)};
+  const std::string md = ev::markdownReport(rs, "Title", "Some notes.");
+  EXPECT_NE(md.find("# Title"), std::string::npos);
+  EXPECT_NE(md.find("Some notes."), std::string::npos);
+  EXPECT_NE(md.find("## Simple (25 % missing)"), std::string::npos);
+  EXPECT_EQ(md.find("## Moderate"), std::string::npos);
+  EXPECT_NE(md.find("## Hard (75 % missing)"), std::string::npos);
+  EXPECT_NE(md.find("## Overall"), std::string::npos);
+  EXPECT_NE(md.find("| direct | polyfit | 1 | 100.0 | 6.00 | 24.00 | 0.750 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("no-mesh 1"), std::string::npos);
+  EXPECT_NE(md.find("t assemble (s)"), std::string::npos);
+  // The sanity row comes after the methods.
+  const std::string simple = md.substr(md.find("## Simple"), md.find("## Hard") - md.find("## Simple"));
+  EXPECT_LT(simple.find("| direct"), simple.find("| sanity"));
+}
