@@ -55,13 +55,6 @@ void printHelp(const po::options_description& visible) {
       << visible << std::endl;
 }
 
-// A colour per primitive from a fixed palette of 12, packed 0xRRGGBB.
-std::uint32_t paletteColour(std::size_t i) {
-  static const std::uint32_t palette[] = {0xe6194b, 0x3cb44b, 0xffe119, 0x4363d8, 0xf58231, 0x911eb4,
-                                          0x46f0f0, 0xf032e6, 0xbcf60c, 0xfabebe, 0x008080, 0x9a6324};
-  return palette[i % (sizeof(palette) / sizeof(palette[0]))];
-}
-
 int run(int argc, char** argv) {
   Options o;
   po::options_description visible("Options");
@@ -198,15 +191,7 @@ int run(int argc, char** argv) {
   if (!o.pcd.empty()) pcd_out = std::make_unique<paco::app::PendingOutput>(o.pcd);
   paco::io::saveVertexGroups(vg_out.writePath(), paco::io::toVertexGroups(primitives));
   if (pcd_out) {
-    paco::io::LabelledCloud coloured;
-    coloured.has_normals = true;
-    for (std::size_t i = 0; i < primitives.size(); ++i)
-      for (const auto& p : primitives[i].points) {
-        coloured.points.push_back(p);
-        coloured.labels.push_back(static_cast<int>(i));
-        coloured.colours.push_back(paletteColour(i));
-      }
-    paco::io::saveCloud(pcd_out->writePath(), coloured);
+    paco::io::saveCloud(pcd_out->writePath(), paco::io::primitivesToCloud(primitives));
   }
   vg_out.commit();
   if (pcd_out) pcd_out->commit();

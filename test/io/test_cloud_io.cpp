@@ -541,3 +541,20 @@ TEST(IoRobustness, CorruptedFilesOnlyEverThrowIoError) {
 }
 
 }  // namespace
+
+TEST(CloudIo, PrimitivesToCloudLabelsAndColoursEveryPoint) {
+  std::vector<paco::PlanarPrimitive> primitives(2);
+  for (int k = 0; k < 3; ++k) {
+    pcl::PointNormal p;
+    p.x = static_cast<float>(k); p.y = 0; p.z = 0;
+    p.normal_x = 0; p.normal_y = 0; p.normal_z = 1;
+    primitives[k % 2].points.push_back(p);
+  }
+  const paco::io::LabelledCloud cloud = paco::io::primitivesToCloud(primitives);
+  ASSERT_EQ(cloud.points.size(), 3u);
+  EXPECT_EQ(cloud.labels, (std::vector<int>{0, 0, 1}));
+  EXPECT_EQ(cloud.colours[0], paco::io::primitiveColour(0));
+  EXPECT_EQ(cloud.colours[2], paco::io::primitiveColour(1));
+  EXPECT_NE(paco::io::primitiveColour(0), paco::io::primitiveColour(1));
+  EXPECT_TRUE(cloud.has_normals);
+}

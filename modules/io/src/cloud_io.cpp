@@ -333,4 +333,22 @@ void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudW
   }
 }
 
+std::uint32_t primitiveColour(std::size_t i) {
+  static const std::uint32_t palette[] = {0xe6194b, 0x3cb44b, 0xffe119, 0x4363d8, 0xf58231, 0x911eb4,
+                                          0x46f0f0, 0xf032e6, 0xbcf60c, 0xfabebe, 0x008080, 0x9a6324};
+  return palette[i % (sizeof(palette) / sizeof(palette[0]))];
+}
+
+LabelledCloud primitivesToCloud(const std::vector<PlanarPrimitive>& primitives) {
+  LabelledCloud cloud;
+  cloud.has_normals = true;
+  for (std::size_t i = 0; i < primitives.size(); ++i)
+    for (const auto& p : primitives[i].points) {
+      cloud.points.push_back(p);
+      cloud.labels.push_back(static_cast<int>(i));
+      cloud.colours.push_back(primitiveColour(i));
+    }
+  return cloud;
+}
+
 }  // namespace paco::io

@@ -3,6 +3,8 @@
 //   paco::io::LabelledCloud scan = paco::io::loadCloud("scan.ply");      // format by extension
 //   if (!scan.has_normals) ... estimate them ...
 //   paco::io::saveCloud("labelled.pcd", scan);                           // PCD with a label field
+#include <paco/common/primitive.h>
+
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
@@ -56,6 +58,12 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
 /// formats use the shortest text that reads back to the same float (at most 9 digits). Throws paco::IoError on
 /// failure (unwritable path, unknown extension, labels.size() != points.size()).
 void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudWriteOptions& options = {});
+
+/// The points of all primitives as one cloud with normals, labelled by primitive index and
+/// coloured by primitiveColour(), e.g. to look at completed primitives in pcl_viewer.
+LabelledCloud primitivesToCloud(const std::vector<PlanarPrimitive>& primitives);
+/// A colour for primitive i, packed 0xRRGGBB, from a palette of 12 well-separated colours.
+std::uint32_t primitiveColour(std::size_t i);
 
 /// Lower-case extension with the dot (".pcd"), or "" when there is none.
 std::string extensionOf(const std::string& path);

@@ -1,0 +1,201 @@
+// paco_reconstruct: incomplete point cloud -> watertight polygonal mesh, the whole pipeline:
+// segment (stage 1), encode + complete with the learned model (stages 2-3), assemble (stage 4).
+//   paco_reconstruct scan.pcd -o part.obj
+//   paco_reconstruct scan.ply -o part.off --assembler cell-complex --model my_model.pt
+//   paco_reconstruct scan.xyz -o part.obj --no-completion        # the "direct" baseline
+#include <torch/torch.h>  // before anything that may pull Qt headers (Qt's `slots` breaks LibTorch)
+
+#include "app_support.h"
+
+#include <paco/assembly/polygonal_assembler.h>
+#include <paco/common/error.h>
+#include <paco/common/progress.h>
+#include <paco/completion/parametric_completer.h>
+#include <paco/encoding/completion_model.h>
+#include <paco/encoding/plane_proxy_encoder.h>
+#include <paco/io/cloud_io.h>
+#include <paco/io/mesh_io.h>
+#include <paco/io/vertex_groups_io.h>
+#include <paco/segmentation/planar_segmenter.h>
+
+#include <boost/program_options.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+namespace po = boost::program_options;
+
+namespace {
+
+const char kTool[] = "paco_reconstruct";
+
+struct Options {
+  std::string input, output, vg_output, pcd_output;
+  bool no_completion = false;
+  std::string segmenter = "gocopp";
+  std::string model;
+  double threshold = 0.7;
+  std::string assembler = "polyfit";
+  std::string solver = "cbc";
+  double time_limit = 60.0;
+  bool drop_non_finite = false;
+  int threads = 0;
+};
+
+void printHelp(const po::options_description& visible) {
+  std::cout
+      << "Usage: " << kTool << " INPUT -o MESH [options]\n\n"
+      << "Turns an incomplete point cloud of a piecewise-planar object (.pcd .ply .xyz .npy, with or\n"
+      << "without normals, any units and frame) into a watertight polygonal mesh (.obj .off .ply):\n"
+      << "  1. segment the points into planes          (--segmenter)\n"
+      << "  2-3. complete the set of planar primitives  (--model; --no-completion skips this)\n"
+      << "  4. assemble the primitives into a mesh      (--assembler, --solver, --time-limit)\n"
+      << "All outputs are in the input's own frame and units. Besides the mesh it writes the\n"
+      << "primitives as PolyFit vertex groups (--vg) and as a PCD coloured by primitive (--pcd).\n\n"
+      << visible << std::endl;
+}
+
+std::string defaultSibling(const std::string& mesh_path, const std::string& suffix) {
+  const std::filesystem::path p(mesh_path);
+  return (p.parent_path() / (p.stem().string() + suffix)).string();
+}
+
+int run(int argc, char** argv) {
+  Options o;
+  po::options_description visible("Options");
+  visible.add_options()
+      ("help,h", "print this help")
+      ("output,o", po::value(&o.output), "output mesh (.obj, .off or .ply)")
+      ("vg", po::value(&o.vg_output), "primitives as PolyFit vertex groups (default: MESH stem + .vg)")
+      ("pcd", po::value(&o.pcd_output), "primitives as a PCD coloured by primitive (default: MESH stem + _primitives.pcd)")
+      ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "gocopp, region-growing, ransac or efficient-ransac")
+      ("model", po::value(&o.model), "model file (default: the shipped model, or $PACO_MODEL)")
+      ("no-completion", po::bool_switch(&o.no_completion), "assemble the segments of the input as they are (the direct baseline)")
+      ("threshold", po::value(&o.threshold)->default_value(o.threshold), "keep completed primitives with confidence above this, in [0, 1]")
+      ("assembler", po::value(&o.assembler)->default_value(o.assembler), "polyfit or cell-complex")
+      ("solver", po::value(&o.solver)->default_value(o.solver), "MIP solver of polyfit: cbc or glpk")
+      ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "assembly time budget in seconds")
+      ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
+      ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
+  po::options_description all;
+  all.add(visible).add_options()("input", po::value(&o.input));
+  po::positional_options_description positional;
+  positional.add("input", 1);
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw paco::app::UsageError(e.what());
+  }
+  if (vm.count("help")) {
+    printHelp(visible);
+    return 0;
+  }
+  if (o.input.empty()) throw paco::app::UsageError("expected an INPUT cloud");
+  if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
+  if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
+  if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
+  if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
+
+  // Check everything that can be checked before the slow work: names, model file, input file.
+  auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>(o.segmenter);
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend(o.assembler);
+  assembler.setMipSolver(o.solver);
+  assembler.setTimeLimit(o.time_limit);
+  paco::CompletionModel::ConstPtr model;
+  paco::app::StageTimer timer;
+  if (!o.no_completion) {
+    if (o.model.empty()) o.model = paco::CompletionModel::findShippedModel();
+    if (o.model.empty())
+      throw paco::ModelError("no model file found: pass --model FILE (train one with paco_train), set "
+                             "PACO_MODEL, or run with --no-completion for the direct baseline");
+    if (o.threads > 0) paco::CompletionModel::setThreads(o.threads);
+    timer.start("load model");
+    model = paco::CompletionModel::load(o.model);
+    timer.stop();
+  }
+
+  paco::InterruptGuard interrupt_guard;
+  timer.start("read");
+  paco::io::CloudReadOptions read;
+  if (o.drop_non_finite) read.non_finite = paco::io::NonFinitePolicy::Drop;
+  paco::io::LabelledCloud scan = paco::io::loadCloud(o.input, read);
+  timer.stop();
+  if (scan.points.empty()) throw paco::InvalidInputError("'" + o.input + "' holds no points");
+  std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
+              scan.has_normals ? ", with normals" : " (normals will be estimated)");
+  // A file without normals reads as zero normals, which the segmenter estimates.
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
+
+  timer.start("segment");
+  paco::PlanarSegmentation segmentation;
+  segmenter->setInputCloud(cloud);
+  segmenter->segment(segmentation);
+  timer.stop();
+  std::printf("segment (%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(), segmentation.size(),
+              100.0 * segmentation.coverage());
+  if (segmentation.empty())
+    throw paco::InvalidInputError("'" + o.input + "': no planar segment found; is it a piecewise-planar object?");
+  if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
+
+  std::vector<paco::PlanarPrimitive> primitives;
+  if (o.no_completion) {
+    primitives = paco::makePrimitives(*cloud, segmentation);
+  } else {
+    timer.start("encode");
+    paco::PlaneProxyEncoder encoder;
+    encoder.setModel(model);
+    encoder.setInputCloud(cloud);
+    encoder.setSegmentation(segmentation);
+    paco::PlaneProxies proxies;
+    encoder.encode(proxies);
+    timer.stop();
+    timer.start("complete");
+    paco::ParametricCompleter completer;
+    completer.setModel(model);
+    completer.setConfidenceThreshold(o.threshold);
+    completer.setInputProxies(proxies);
+    completer.complete(primitives);
+    timer.stop();
+    std::printf("complete: %zu primitives with confidence > %.2f\n", primitives.size(), o.threshold);
+  }
+  if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
+
+  timer.start("assemble");
+  assembler.setInputPrimitives(primitives);
+  paco::SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  timer.stop();
+  if (!result.ok())
+    throw paco::Error("assembly (" + o.assembler + ") failed: " + paco::toString(result.status) +
+                      (result.message.empty() ? "" : ": " + result.message));
+  std::printf("assemble (%s): %zu faces, %zu vertices, %s\n", o.assembler.c_str(), mesh.faces.size(),
+              mesh.vertices.size(), result.topology.describe().c_str());
+
+  // Outputs appear only together and only when complete.
+  timer.start("write");
+  paco::app::PendingOutput mesh_out(o.output), vg_out(o.vg_output), pcd_out(o.pcd_output);
+  paco::io::saveMesh(mesh_out.writePath(), mesh);
+  paco::io::saveVertexGroups(vg_out.writePath(), paco::io::toVertexGroups(primitives));
+  paco::io::CloudWriteOptions compressed;
+  compressed.pcd_encoding = paco::io::PcdEncoding::BinaryCompressed;
+  paco::io::saveCloud(pcd_out.writePath(), paco::io::primitivesToCloud(primitives), compressed);
+  mesh_out.commit();
+  vg_out.commit();
+  pcd_out.commit();
+  timer.stop();
+  std::printf("wrote mesh '%s', primitives '%s' and '%s'\n", o.output.c_str(), o.vg_output.c_str(),
+              o.pcd_output.c_str());
+  timer.print();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return paco::app::runTool(kTool, [&] { return run(argc, argv); });
+}

@@ -1,0 +1,77 @@
+// Chaining the four paco stages by hand, the way PCL users chain filters.
+//
+//   chain_stages INPUT.pcd OUTPUT.obj [MODEL.pt]
+//
+// Each stage is set up with setters, given its input, and run with one verb. Swapping a backend
+// is one call: the segmenter by name in makePlanarSegmenter(), the assembler with setBackend().
+#include <torch/torch.h>  // LibTorch first: Qt's `slots` macro (pulled in by some PCL headers) breaks it
+
+#include <paco/assembly/polygonal_assembler.h>
+#include <paco/common/error.h>
+#include <paco/completion/parametric_completer.h>
+#include <paco/encoding/completion_model.h>
+#include <paco/encoding/plane_proxy_encoder.h>
+#include <paco/io/cloud_io.h>
+#include <paco/io/mesh_io.h>
+#include <paco/segmentation/planar_segmenter.h>
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::cerr << "usage: chain_stages INPUT.pcd OUTPUT.obj [MODEL.pt]\n";
+    return 2;
+  }
+  try {
+    // Any cloud, any units: .pcd, .ply, .xyz or .npy, with or without normals.
+    auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(paco::io::loadCloud(argv[1]).points);
+
+    // Stage 1: planar segmentation. Other backends: "region-growing", "ransac", "efficient-ransac".
+    auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>("gocopp");
+    segmenter->setInputCloud(cloud);
+    segmenter->setDistanceThreshold(0.004);  // fraction of the bounding-box diagonal
+    paco::PlanarSegmentation segmentation;
+    segmenter->segment(segmentation);
+    std::cout << "segments: " << segmentation.size() << "\n";
+
+    // Stages 2 and 3: the learned completion, when a model is at hand.
+    std::vector<paco::PlanarPrimitive> primitives;
+    const std::string model_path = argc > 3 ? argv[3] : paco::CompletionModel::findShippedModel();
+    if (!model_path.empty()) {
+      auto model = paco::CompletionModel::load(model_path);
+      paco::PlaneProxyEncoder encoder;
+      encoder.setModel(model);
+      encoder.setInputCloud(cloud);
+      encoder.setSegmentation(segmentation);
+      paco::PlaneProxies proxies;
+      encoder.encode(proxies);
+
+      paco::ParametricCompleter completer;
+      completer.setModel(model);
+      completer.setConfidenceThreshold(0.7);
+      completer.setInputProxies(proxies);
+      completer.complete(primitives);  // in the input's own frame and units
+    } else {
+      primitives = paco::makePrimitives(*cloud, segmentation);  // no model: the direct baseline
+    }
+    std::cout << "primitives: " << primitives.size() << "\n";
+
+    // Stage 4: polygonal assembly. Swap to the graph-cut backend with setBackend("cell-complex").
+    paco::PolygonalAssembler assembler;
+    assembler.setBackend("polyfit");
+    assembler.setMipSolver("cbc");
+    assembler.setInputPrimitives(primitives);
+    pcl::PolygonMesh mesh;
+    const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+    if (!result.ok()) {
+      std::cerr << "assembly failed: " << paco::toString(result.status) << ": " << result.message << "\n";
+      return 1;
+    }
+    paco::io::savePolygonMesh(argv[2], mesh);
+    std::cout << "mesh: " << mesh.polygons.size() << " faces -> " << argv[2] << "\n";
+    return 0;
+  } catch (const paco::Error& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,142 @@
+// paco_reconstruct end to end on the shipped sample scan: a closed mesh in the input's own frame
+// plus the primitives as .vg and PCD; bad input and a missing model give a clear error, a
+// non-zero exit, and no output file at all.
+#include "test_support.h"
+
+#include <paco/common/surface_mesh.h>
+#include <paco/io/cloud_io.h>
+#include <paco/io/mesh_io.h>
+#include <paco/io/vertex_groups_io.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+using paco::test::TempDir;
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+std::string samplePath() { return std::string(PACO_SOURCE_DIR) + "/data/sample_partial.pcd"; }
+std::string tool() { return quoted(paco::test::toolPath("paco_reconstruct")); }
+
+std::size_t filesIn(const fs::path& dir) {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir)) ++n;
+  return n;
+}
+
+// The sample in a different frame and unit (x 250, shifted): outputs must follow it.
+std::string writeMovedSample(const TempDir& dir) {
+  paco::io::LabelledCloud cloud = paco::io::loadCloud(samplePath());
+  for (auto& p : cloud.points) {
+    p.x = 250.0f * p.x + 1000.0f;
+    p.y = 250.0f * p.y - 40.0f;
+    p.z = 250.0f * p.z + 7.0f;
+  }
+  const std::string path = dir.file("moved.ply");
+  paco::io::saveCloud(path, cloud);
+  return path;
+}
+
+TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
+  TempDir dir;
+  const std::string input = writeMovedSample(dir);
+  const std::string mesh_path = dir.file("part.obj");
+  std::string log;
+  const int rc = paco::test::runCommand(tool() + " " + quoted(input) + " -o " + quoted(mesh_path) +
+                                            " --no-completion --assembler cell-complex",
+                                        &log);
+  ASSERT_EQ(rc, 0) << log;
+  EXPECT_NE(log.find("segment (gocopp)"), std::string::npos) << log;
+  EXPECT_NE(log.find("timing:"), std::string::npos) << log;
+
+  const paco::SurfaceMesh mesh = paco::io::loadMesh(mesh_path);
+  const paco::MeshTopology topology = paco::analyseTopology(mesh);
+  EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
+  EXPECT_GT(paco::signedVolume(mesh), 0.0);
+
+  // Same frame as the input: the two bounding boxes overlap almost entirely.
+  const paco::io::LabelledCloud cloud = paco::io::loadCloud(input);
+  Eigen::Vector3d cmin = Eigen::Vector3d::Constant(1e300), cmax = -cmin;
+  for (const auto& p : cloud.points) {
+    cmin = cmin.cwiseMin(Eigen::Vector3d(p.x, p.y, p.z));
+    cmax = cmax.cwiseMax(Eigen::Vector3d(p.x, p.y, p.z));
+  }
+  Eigen::Vector3d mmin, mmax;
+  paco::boundingBox(mesh, mmin, mmax);
+  const double diagonal = (cmax - cmin).norm();
+  EXPECT_LT((mmin - cmin).norm(), 0.2 * diagonal);
+  EXPECT_LT((mmax - cmax).norm(), 0.2 * diagonal);
+
+  const auto groups = paco::io::loadVertexGroups(dir.file("part.vg"));
+  EXPECT_GE(groups.segmentation.size(), 4u);
+  const auto coloured = paco::io::loadCloud(dir.file("part_primitives.pcd"));
+  EXPECT_EQ(coloured.points.size(), groups.points.size());
+  EXPECT_EQ(filesIn(dir.path()), 4u);  // input + mesh + .vg + .pcd, nothing partial
+}
+
+TEST(PacoReconstruct, TruncatedInputFailsWithoutOutputs) {
+  TempDir dir;
+  const std::string bytes = paco::test::readBytes(samplePath());
+  paco::test::writeBytes(dir.file("cut.pcd"), bytes.substr(0, bytes.size() / 2));
+  std::string log;
+  const int rc = paco::test::runCommand(tool() + " " + quoted(dir.file("cut.pcd")) + " -o " +
+                                            quoted(dir.file("part.obj")) + " --no-completion",
+                                        &log);
+  EXPECT_EQ(rc, 1) << log;
+  EXPECT_NE(log.find("cut.pcd"), std::string::npos) << log;
+  EXPECT_NE(log.find("truncated"), std::string::npos) << log;
+  EXPECT_EQ(filesIn(dir.path()), 1u);
+}
+
+TEST(PacoReconstruct, MissingModelIsAClearError) {
+  TempDir dir;
+  std::string log;
+  const int rc = paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("part.obj")) +
+                                            " --model " + quoted(dir.file("no_such_model.pt")),
+                                        &log);
+  EXPECT_EQ(rc, 1) << log;
+  EXPECT_NE(log.find("no_such_model.pt"), std::string::npos) << log;
+  EXPECT_EQ(filesIn(dir.path()), 0u);
+}
+
+TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
+  std::string log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()), &log), 2) << log;
+  EXPECT_NE(log.find("-o MESH"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --threshold 2", &log), 2) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
+  EXPECT_NE(log.find("--no-completion"), std::string::npos);
+}
+
+TEST(PacoReconstruct, UnknownBackendNamesAreRejectedBeforeAnyWork) {
+  TempDir dir;
+  std::string log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("m.obj")) +
+                                       " --no-completion --segmenter nope",
+                                   &log),
+            1)
+      << log;
+  EXPECT_NE(log.find("nope"), std::string::npos) << log;
+  EXPECT_EQ(filesIn(dir.path()), 0u);
+}
+
+#ifdef PACO_CHAIN_STAGES_EXAMPLE
+// The documentation's example chains the four classes by hand; it must keep working.
+TEST(ChainStagesExample, RunsOnTheSampleScan) {
+  TempDir dir;
+  std::string log;
+  const int rc = paco::test::runCommand(std::string("PACO_MODEL= ") + quoted(PACO_CHAIN_STAGES_EXAMPLE) + " " +
+                                            quoted(samplePath()) + " " + quoted(dir.file("example.obj")),
+                                        &log);
+  ASSERT_EQ(rc, 0) << log;
+  EXPECT_NE(log.find("segments:"), std::string::npos) << log;
+  const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("example.obj"));
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosed());
+}
+#endif
+
+}  // namespace
