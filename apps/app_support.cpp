@@ -24,6 +24,20 @@ int runTool(const std::string& tool_name, const std::function<int()>& body) {
   }
 }
 
+boost::program_options::variables_map parseCommandLine(
+    int argc, char** argv, const boost::program_options::options_description& options,
+    const boost::program_options::positional_options_description& positional) {
+  namespace po = boost::program_options;
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(options).positional(positional).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw UsageError(e.what());
+  }
+  return vm;
+}
+
 namespace {
 std::string temporaryName(const std::string& final_path) {
   const std::filesystem::path p(final_path);

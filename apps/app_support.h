@@ -1,6 +1,8 @@
 #pragma once
 // Shared plumbing of the paco_* tools: error reporting with a non-zero exit, timing, and output
 // files that appear only when complete (never a partial file after an error or Ctrl-C).
+#include <boost/program_options.hpp>
+
 #include <chrono>
 #include <functional>
 #include <stdexcept>
@@ -17,6 +19,12 @@ int runTool(const std::string& tool_name, const std::function<int()>& body);
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+/// Parses the command line with boost::program_options; a malformed command line (unknown
+/// option, missing value, bad number) becomes a UsageError, which runTool reports with exit 2.
+boost::program_options::variables_map parseCommandLine(
+    int argc, char** argv, const boost::program_options::options_description& options,
+    const boost::program_options::positional_options_description& positional);
 
 /// An output path that is written to "<path>.partial" first and renamed into place by commit().
 /// Pending outputs that are never committed are deleted by runTool on failure and on destruction.

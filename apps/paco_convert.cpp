@@ -113,13 +113,7 @@ int run(int argc, char** argv) {
   all.add(visible).add_options()("input", po::value(&o.input))("output", po::value(&o.output));
   po::positional_options_description positional;
   positional.add("input", 1).add("output", 1);
-  po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
-    po::notify(vm);
-  } catch (const po::error& e) {
-    throw paco::app::UsageError(e.what());
-  }
+  const po::variables_map vm = paco::app::parseCommandLine(argc, argv, all, positional);
   if (vm.count("help")) {
     printHelp(visible);
     return 0;

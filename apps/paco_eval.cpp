@@ -189,13 +189,7 @@ int run(int argc, char** argv) {
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");
-  po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(argc, argv).options(visible).run(), vm);
-    po::notify(vm);
-  } catch (const po::error& e) {
-    throw paco::app::UsageError(e.what());
-  }
+  const po::variables_map vm = paco::app::parseCommandLine(argc, argv, visible, {});
   if (vm.count("help")) {
     printHelp(visible);
     return 0;
