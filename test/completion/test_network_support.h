@@ -1,33 +1,10 @@
 #pragma once
 // Small models and synthetic batches for the network, checkpoint and public-API tests.
+#include "tiny_model_config.h"
 #include <paco/completion/network.h>
 #include <paco/encoding/model_config.h>
 
 namespace paco::test {
-
-/// A model small enough that a forward pass takes a few milliseconds.
-inline ModelConfig tinyModelConfig(const std::string& distributor = "projected") {
-  ModelConfig c = ModelConfig::preset("cpu");
-  c.name = "tiny";
-  c.num_centres = 32;
-  c.knn_k = 8;
-  c.edge_conv_widths = {8, 16};
-  c.width = 32;
-  c.heads = 4;
-  c.position_hidden = 16;
-  c.normal_hidden = 16;
-  c.encoder_depth = 1;
-  c.encoder_graph_k = 4;
-  c.plane_slots = 6;
-  c.global_width = 64;
-  c.generated_queries = 8;
-  c.kept_queries = 6;
-  c.decoder_depth = 2;
-  c.points_per_plane = 16;
-  c.distributor_hidden = 32;
-  c.distributor = distributor;
-  return c;
-}
 
 /// Points on the 6 faces of a box in the normalised frame, labelled by face (`faces` of them
 /// labelled, the rest -1), with the face normals. Deterministic for a seed.

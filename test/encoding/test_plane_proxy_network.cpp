@@ -1,3 +1,4 @@
+#include "tiny_model_config.h"
 #include <paco/common/error.h>
 #include <paco/encoding/plane_proxy_network.h>
 
@@ -6,27 +7,7 @@
 namespace paco {
 namespace {
 
-ModelConfig tinyConfig() {
-  ModelConfig c = ModelConfig::preset("cpu");
-  c.name = "tiny";
-  c.num_centres = 32;
-  c.knn_k = 8;
-  c.edge_conv_widths = {8, 16};
-  c.width = 32;
-  c.heads = 4;
-  c.position_hidden = 16;
-  c.normal_hidden = 16;
-  c.encoder_depth = 1;
-  c.encoder_graph_k = 4;
-  c.plane_slots = 6;
-  c.global_width = 64;
-  c.generated_queries = 8;
-  c.kept_queries = 6;
-  c.decoder_depth = 1;
-  c.points_per_plane = 16;
-  c.distributor_hidden = 32;
-  return c;
-}
+ModelConfig tinyConfig() { return test::tinyModelConfig(); }
 
 // Points on `segments` horizontal planes z = 0.1 s (labels s), largest segment first by count.
 struct Batch {
