@@ -308,10 +308,7 @@ bool GoCoPPOptimizer::proposeMerge(int a, int b, Proposal& p) const {
   p.delta_distance = sum - pa.distance_sum - pb.distance_sum;
   p.delta_assigned = static_cast<long>(kept.size()) - static_cast<long>(merged.size());
   p.delta_primitives = -1;
-  p.groups.push_back(std::move(kept));
-  p.normals.push_back(normal);
-  p.offsets.push_back(offset);
-  p.distance_sums.push_back(sum);
+  p.addGroup(std::move(kept), normal, offset, sum);
   return true;
 }
 
@@ -424,10 +421,8 @@ bool GoCoPPOptimizer::proposeSplit(int a, Proposal& p) const {
   p.kind = Proposal::Kind::Split;
   p.a = a;
   for (int s = 0; s < 2; ++s) {
-    p.distance_sums.push_back(distanceSum(group[s], normal[s], offset[s]));
-    p.groups.push_back(std::move(group[s]));
-    p.normals.push_back(normal[s]);
-    p.offsets.push_back(offset[s]);
+    const double sum = distanceSum(group[s], normal[s], offset[s]);
+    p.addGroup(std::move(group[s]), normal[s], offset[s], sum);
   }
   p.delta_distance = best_sum - pa.distance_sum;
   p.delta_assigned = 0;
@@ -462,10 +457,7 @@ bool GoCoPPOptimizer::proposeInsert(int a, Proposal& p) const {
   p.delta_distance = sum - pa.distance_sum;
   p.delta_assigned = static_cast<long>(candidates.size());
   p.delta_primitives = 0;
-  p.groups.push_back(std::move(grown));
-  p.normals.push_back(normal);
-  p.offsets.push_back(offset);
-  p.distance_sums.push_back(sum);
+  p.addGroup(std::move(grown), normal, offset, sum);
   return true;
 }
 
@@ -492,10 +484,7 @@ bool GoCoPPOptimizer::proposeExclude(int a, Proposal& p) const {
   p.delta_distance = sum - pa.distance_sum;
   p.delta_assigned = static_cast<long>(kept.size()) - static_cast<long>(pa.members.size());
   p.delta_primitives = 0;
-  p.groups.push_back(std::move(kept));
-  p.normals.push_back(normal);
-  p.offsets.push_back(offset);
-  p.distance_sums.push_back(sum);
+  p.addGroup(std::move(kept), normal, offset, sum);
   return true;
 }
 

@@ -101,6 +101,13 @@ class GoCoPPOptimizer {
     double delta_distance = 0.0;
     long delta_assigned = 0;
     int delta_primitives = 0;
+    /// Appends one new primitive: its members, plane and sum of point-to-plane distances.
+    void addGroup(std::vector<int> members, const Eigen::Vector3d& normal, double offset, double distance_sum) {
+      groups.push_back(std::move(members));
+      normals.push_back(normal);
+      offsets.push_back(offset);
+      distance_sums.push_back(distance_sum);
+    }
   };
 
   double energyOf(double distance_sum, double assigned, double primitives) const;
