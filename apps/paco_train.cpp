@@ -47,6 +47,7 @@ struct Options {
   double augment_scale = 0.0, augment_offset = 0.0;
   int input_points = 2048, gt_points = 8192;
   int prefetch = 3;
+  int checkpoint_every = 200;
   bool quiet = false;
 };
 
@@ -102,6 +103,8 @@ int run(int argc, char** argv) {
       ("input-points", po::value(&o.input_points)->default_value(o.input_points), "points per input cloud")
       ("gt-points", po::value(&o.gt_points)->default_value(o.gt_points), "GT points per sample")
       ("prefetch", po::value(&o.prefetch)->default_value(o.prefetch), "batches loaded ahead by the background thread")
+      ("checkpoint-every", po::value(&o.checkpoint_every)->default_value(o.checkpoint_every),
+       "also save last.pt every N steps inside an epoch (0 = only at epoch ends), so a killed run loses little")
       ("quiet", po::bool_switch(&o.quiet), "no progress bars");
   po::options_description all;
   all.add(visible).add_options()("dataset", po::value(&o.dataset));
@@ -139,6 +142,7 @@ int run(int argc, char** argv) {
   options.learning_rate = o.lr;
   options.seed = o.seed;
   options.prefetch = o.prefetch;
+  options.checkpoint_every = o.checkpoint_every;
   options.checkpoint_dir = o.output;
   options.show_progress = !o.quiet;
 
@@ -173,10 +177,10 @@ int run(int argc, char** argv) {
   paco::InterruptGuard guard;
   const auto records = trainer.fit(train, val);
   for (const auto& r : records)
-    std::printf("epoch %d: step %lld, lr %.3g, train loss %s, val loss %s, val recall %s, NC_prim %s, %.1f samples/s\n",
+    std::printf("epoch %d: step %lld, lr %.3g, train loss %s, val loss %s, val recall %s, NC_prim %s, %.1f samples/s (%s)\n",
                 r.epoch, static_cast<long long>(r.step), r.learning_rate, formatValue(r.train_loss).c_str(),
                 formatValue(r.val_loss).c_str(), formatValue(r.val_metrics.recall).c_str(),
-                formatValue(r.val_metrics.nc_prim).c_str(), r.samples_per_second);
+                formatValue(r.val_metrics.nc_prim).c_str(), r.samples_per_second, r.step_times.summary().c_str());
   if (trainer.interrupted()) {
     std::printf("interrupted: state saved to '%s' (epoch %d, step %lld); continue with --resume\n",
                 last.string().c_str(), trainer.epoch(), static_cast<long long>(trainer.globalStep()));

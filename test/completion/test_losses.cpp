@@ -315,3 +315,83 @@ TEST(Losses, LargeChamferUsesKdTreesWithTheSameResult) {
   const double expected = (std::get<0>(d.min(1)).mean() + std::get<0>(d.min(0)).mean()).item<double>();
   EXPECT_NEAR(chamferSquared(a, b).item<double>(), expected, 1e-6 * expected);
 }
+
+namespace {
+
+// Chamfer (squared L2) of two point sets from the full distance matrix: the reference.
+double referenceChamfer(const torch::Tensor& a, const torch::Tensor& b) {
+  const auto d = pairwiseSquaredDistances(a.to(torch::kDouble), b.to(torch::kDouble));
+  return (std::get<0>(d.min(1)).mean() + std::get<0>(d.min(0)).mean()).item<double>();
+}
+
+// A random batch: B samples, M predictions of P points, N GT points on `planes` labelled planes.
+Scene randomScene(int B, int M, int P, int N, int planes, int seed) {
+  torch::manual_seed(seed);
+  Scene s;
+  s.truth.points = torch::rand({B, N, 3});
+  s.truth.labels = torch::randint(0, planes, {B, N}, torch::kLong);
+  s.truth.normals = torch::nn::functional::normalize(torch::randn({B, planes, 3}),
+                                                     torch::nn::functional::NormalizeFuncOptions().dim(-1));
+  s.truth.offsets = torch::rand({B, planes});
+  s.truth.mask = torch::ones({B, planes}, torch::kBool);
+  s.output.normals = torch::nn::functional::normalize(torch::randn({B, M, 3}),
+                                                      torch::nn::functional::NormalizeFuncOptions().dim(-1));
+  s.output.offsets = torch::rand({B, M});
+  s.output.points = torch::rand({B, M, P, 3});
+  s.output.logits = torch::randn({B, M});
+  return s;
+}
+
+}  // namespace
+
+TEST(Losses, MatchingChamferCostEqualsTheDistanceMatrixFormula) {
+  const Scene s = randomScene(2, 7, 24, 300, 5, 11);
+  LossConfig config;
+  config.classification = config.normal = config.offset = config.repulsion = false;
+  config.match_gt_points = 0;  // all points: the formula below uses all of them
+  config.match_points_per_plane = 0;
+  for (int b = 0; b < 2; ++b) {
+    const Eigen::MatrixXd cost = matchingCost(s.output, s.truth, b, config);
+    for (int g = 0; g < 5; ++g) {
+      const auto members = torch::nonzero(s.truth.labels[b] == g).view({-1});
+      for (int j = 0; j < 7; ++j) {
+        const double expected =
+            config.match_chamfer_weight * referenceChamfer(s.output.points[b][j], s.truth.points[b].index_select(0, members));
+        EXPECT_NEAR(cost(g, j), expected, 1e-5 * expected) << "sample " << b << " plane " << g << " prediction " << j;
+      }
+    }
+  }
+}
+
+TEST(Losses, BatchedChamferTermsEqualThePerPairFormula) {
+  const Scene s = randomScene(3, 6, 20, 250, 4, 12);
+  LossConfig config;
+  config.ranking = false;
+  const LossResult r = computeLosses(s.output, s.truth, config);
+  double plane = 0.0, overall = 0.0;
+  for (int b = 0; b < 3; ++b) {
+    std::vector<torch::Tensor> matched;
+    for (int g = 0; g < 4; ++g) {
+      const int j = r.matching[b][g];
+      ASSERT_GE(j, 0);
+      const auto members = torch::nonzero(s.truth.labels[b] == g).view({-1});
+      plane += referenceChamfer(s.output.points[b][j], s.truth.points[b].index_select(0, members));
+      matched.push_back(s.output.points[b][j]);
+    }
+    overall += referenceChamfer(torch::cat(matched), s.truth.points[b]);
+  }
+  EXPECT_NEAR(r.terms.at("plane_chamfer"), config.plane_chamfer_weight * plane / 3.0, 1e-5 * plane);
+  EXPECT_NEAR(r.terms.at("overall_chamfer"), config.overall_chamfer_weight * overall / 3.0, 1e-5 * overall);
+}
+
+TEST(Losses, RepulsionNeighboursEqualTopK) {
+  torch::manual_seed(5);
+  const auto x = torch::rand({3, 40, 3}) * 0.1;
+  const int k = 5;
+  const double h = 0.03, radius = 0.07;
+  // Reference: k nearest from the full (masked) distance matrix.
+  const auto d2 = (x.unsqueeze(2) - x.unsqueeze(1)).pow(2).sum(-1) + torch::eye(40).unsqueeze(0) * 1e10;
+  const auto nearest = std::get<0>(torch::topk(d2, k, -1, /*largest=*/false)).clamp_min(1e-12);
+  const auto expected = (radius - nearest.sqrt() * torch::exp(-nearest / (h * h))).mean({1, 2});
+  EXPECT_TRUE(torch::allclose(repulsionLoss(x, k, h, radius), expected, 1e-5, 1e-7));
+}

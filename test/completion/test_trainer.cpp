@@ -260,6 +260,46 @@ TEST(Trainer, ResumeContinuesExactlyAsAnUninterruptedRun) {
   EXPECT_EQ(rows, 2);
 }
 
+TEST(Trainer, PeriodicCheckpointSurvivesAKilledRun) {
+  ThreadsGuard threads;
+  paco::test::TempDir dir;
+  const BatchSource train = syntheticSource(6);  // 3 batches of 2 per epoch
+  const BatchSource val = syntheticSource(2);
+  TrainerOptions straight_options = tinyOptions(dir.file("straight"));
+  straight_options.epochs = 1;
+  Trainer straight(straight_options);
+  straight.fit(train, val);
+
+  // The process "dies" in step 3 (an exception, so nothing is saved on the way out); the
+  // checkpoint written after step 2 is what remains.
+  TrainerOptions killed_options = tinyOptions(dir.file("killed"));
+  killed_options.epochs = 1;
+  killed_options.checkpoint_every = 2;
+  killed_options.on_step = [](std::int64_t step) {
+    if (step == 3) throw std::runtime_error("killed");
+  };
+  {
+    Trainer first(killed_options);
+    EXPECT_THROW(first.fit(train, val), std::runtime_error);
+  }
+  killed_options.on_step = nullptr;
+  Trainer second(killed_options);
+  second.resume(dir.file("killed") + "/last.pt");
+  EXPECT_EQ(second.globalStep(), 2);
+  EXPECT_EQ(second.epochBatch(), 2u);
+  second.fit(train, val);
+  EXPECT_EQ(second.globalStep(), 3);
+  const auto a = straight.network()->parameters();
+  const auto b = second.network()->parameters();
+  double max_difference = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    max_difference = std::max(max_difference, (a[i] - b[i]).abs().max().item<double>());
+  EXPECT_LT(max_difference, 1e-6);
+  TrainerOptions bad = tinyOptions("");
+  bad.checkpoint_every = -1;
+  EXPECT_THROW(Trainer{bad}, paco::InvalidInputError);
+}
+
 TEST(Trainer, ResumeNeedsATrainingCheckpoint) {
   paco::test::TempDir dir;
   Trainer trainer(tinyOptions(""));

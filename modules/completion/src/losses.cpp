@@ -3,9 +3,12 @@
 #include <paco/common/error.h>
 #include <paco/completion/matching.h>
 
-#include <flann/flann.hpp>
+#include "nearest_neighbours.h"
+
+#include <ATen/Parallel.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -61,73 +64,44 @@ void validate(const NetworkOutput& output, const GroundTruthBatch& truth) {
   }
 }
 
-// Per-plane GT point indices of one sample (planes 0..count-1).
-std::vector<torch::Tensor> pointsOfPlanes(const torch::Tensor& labels, int count) {
-  std::vector<torch::Tensor> result;
-  result.reserve(count);
-  for (int g = 0; g < count; ++g) result.push_back(torch::nonzero(labels == g).view({-1}));
-  return result;
-}
-
-// Elements of a temporary distance block: keeps no-grad distance matrices near 64 MB.
-constexpr int64_t kBlockElements = int64_t{1} << 24;
-// Above this many pairs, nearest neighbours come from kd-trees instead of a distance matrix.
-constexpr int64_t kBruteForceElements = int64_t{1} << 21;
-
-// Nearest neighbour (squared L2) of every row of `queries` among the rows of `points`, with an
-// exact FLANN kd-tree: O((n + m) log m) instead of the O(n·m) distance matrix.
-torch::Tensor kdTreeNearest(const torch::Tensor& points, const torch::Tensor& queries) {
-  const auto data = points.detach().to(torch::kFloat).contiguous();
-  const auto query = queries.detach().to(torch::kFloat).contiguous();
-  flann::Matrix<float> data_matrix(data.data_ptr<float>(), static_cast<std::size_t>(data.size(0)), 3);
-  flann::Matrix<float> query_matrix(query.data_ptr<float>(), static_cast<std::size_t>(query.size(0)), 3);
-  flann::Index<flann::L2_Simple<float>> index(data_matrix, flann::KDTreeSingleIndexParams(15));
-  index.buildIndex();
-  std::vector<int> nearest(static_cast<std::size_t>(query.size(0)));
-  std::vector<float> distances(nearest.size());
-  flann::Matrix<int> nearest_matrix(nearest.data(), nearest.size(), 1);
-  flann::Matrix<float> distance_matrix(distances.data(), distances.size(), 1);
-  index.knnSearch(query_matrix, nearest_matrix, distance_matrix, 1, flann::SearchParams(-1));
-  return torch::tensor(std::vector<int64_t>(nearest.begin(), nearest.end()), torch::kLong);
-}
-
-// Nearest neighbour of every row of a in b and of every row of b in a (squared L2). Small sets:
-// brute force in chunks of a's rows; large ones (paper sizes: 40 x 1280 points vs 8192): kd-trees.
-std::pair<torch::Tensor, torch::Tensor> nearestNeighbours(const torch::Tensor& a, const torch::Tensor& b) {
-  torch::NoGradGuard no_grad;
-  const int64_t n = a.size(0), m = b.size(0);
-  if (n * m > kBruteForceElements) return {kdTreeNearest(b, a), kdTreeNearest(a, b)};
-  const int64_t chunk = std::max<int64_t>(1, kBlockElements / std::max<int64_t>(m, 1));
-  auto nearest_in_b = torch::empty({n}, torch::kLong);
-  auto best_for_b = torch::full({m}, std::numeric_limits<float>::infinity(), a.options());
-  auto nearest_in_a = torch::zeros({m}, torch::kLong);
-  for (int64_t start = 0; start < n; start += chunk) {
-    const int64_t end = std::min(n, start + chunk);
-    const auto d = pairwiseSquaredDistances(a.slice(0, start, end), b);
-    nearest_in_b.slice(0, start, end).copy_(d.argmin(1));
-    const auto column_min = d.min(0);
-    const auto better = std::get<0>(column_min) < best_for_b;
-    best_for_b = torch::where(better, std::get<0>(column_min), best_for_b);
-    nearest_in_a = torch::where(better, std::get<1>(column_min) + start, nearest_in_a);
-  }
-  return {nearest_in_b, nearest_in_a};
-}
-
 // Indices (T, P, k) of the k nearest other points of each point inside its own set.
 torch::Tensor neighbourIndices(const torch::Tensor& points, int k) {
-  torch::NoGradGuard no_grad;
-  const int64_t T = points.size(0), P = points.size(1);
-  const int64_t chunk = std::max<int64_t>(1, kBlockElements / (P * P));
+  const auto x = points.detach().to(torch::kFloat).contiguous();
+  const int64_t T = x.size(0), P = x.size(1);
   auto result = torch::empty({T, P, k}, torch::kLong);
-  const auto eye = torch::eye(P, points.options().dtype(torch::kBool)).unsqueeze(0);
-  for (int64_t start = 0; start < T; start += chunk) {
-    const int64_t end = std::min(T, start + chunk);
-    const auto x = points.slice(0, start, end);
-    const auto sq = (x.pow(2).sum(-1).unsqueeze(2) + x.pow(2).sum(-1).unsqueeze(1) -
-                     2.0 * torch::matmul(x, x.transpose(1, 2))).masked_fill(eye, 1e10);
-    result.slice(0, start, end).copy_(std::get<1>(torch::topk(sq, k, -1, /*largest=*/false)));
-  }
+  const float* data = x.data_ptr<float>();
+  int64_t* out = result.data_ptr<int64_t>();
+  at::parallel_for(0, T, 1, [&](int64_t begin, int64_t end) {
+    for (int64_t t = begin; t < end; ++t) detail::kNearestWithinSet(data + t * P * 3, P, k, out + t * P * k);
+  });
   return result;
+}
+
+// Pairs (predicted point, GT point) whose weighted squared distances make up a chamfer term:
+// term = Σ weight · ‖predicted − gt‖². Indices are into the flattened batch.
+struct ChamferPairs {
+  std::vector<int64_t> predicted, gt;
+  std::vector<double> weight;
+  void add(int64_t p, int64_t g, double w) {
+    predicted.push_back(p);
+    gt.push_back(g);
+    weight.push_back(w);
+  }
+  void append(const ChamferPairs& other) {
+    predicted.insert(predicted.end(), other.predicted.begin(), other.predicted.end());
+    gt.insert(gt.end(), other.gt.begin(), other.gt.end());
+    weight.insert(weight.end(), other.weight.begin(), other.weight.end());
+  }
+};
+
+// Σ weight · ‖predicted[i] − gt[j]‖² over the pairs; `predicted` (n, 3) carries autograd.
+torch::Tensor pairedSquaredSum(const torch::Tensor& predicted, const torch::Tensor& gt, const ChamferPairs& pairs) {
+  if (pairs.predicted.empty()) return torch::zeros({}, predicted.options());
+  const auto long_options = torch::TensorOptions().dtype(torch::kLong);
+  const auto p = predicted.index_select(0, torch::tensor(pairs.predicted, long_options));
+  const auto g = gt.index_select(0, torch::tensor(pairs.gt, long_options));
+  const auto w = torch::tensor(pairs.weight, torch::kDouble).to(predicted.scalar_type());
+  return ((p - g).pow(2).sum(-1) * w).sum();
 }
 
 }  // namespace
@@ -173,7 +147,12 @@ bool LossConfig::enabled(const std::string& name) const {
 torch::Tensor chamferSquared(const torch::Tensor& a, const torch::Tensor& b) {
   if (a.dim() != 2 || b.dim() != 2 || a.size(1) != 3 || b.size(1) != 3 || a.size(0) == 0 || b.size(0) == 0)
     throw InvalidInputError("chamferSquared: needs two non-empty (n, 3) point sets");
-  const auto [nearest_in_b, nearest_in_a] = nearestNeighbours(a, b);
+  const auto a_rows = a.detach().to(torch::kFloat).contiguous();
+  const auto b_rows = b.detach().to(torch::kFloat).contiguous();
+  auto nearest_in_b = torch::empty({a.size(0)}, torch::kLong);
+  auto nearest_in_a = torch::empty({b.size(0)}, torch::kLong);
+  detail::mutualNearest(a_rows.data_ptr<float>(), a.size(0), b_rows.data_ptr<float>(), b.size(0),
+                        nearest_in_b.data_ptr<int64_t>(), nearest_in_a.data_ptr<int64_t>());
   // The gathered distances have the same value and (sub)gradient as the min, without keeping
   // the (n, m) matrix in the autograd graph.
   const auto a_to_b = (a - b.index_select(0, nearest_in_b)).pow(2).sum(-1).mean();
@@ -224,7 +203,10 @@ torch::Tensor rankingTargets(const torch::Tensor& candidate_normals, const torch
 LossResult computeLosses(const NetworkOutput& output, const GroundTruthBatch& truth, const LossConfig& config) {
   validate(output, truth);
   LossResult result;
+  const auto matching_started = std::chrono::steady_clock::now();
   result.matching = matchPredictions(output, truth, config);
+  result.matching_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - matching_started).count();
   const int64_t B = truth.batchSize();
   const int64_t M = output.normals.size(1);
   const int64_t P = output.points.size(2);
@@ -274,26 +256,69 @@ LossResult computeLosses(const NetworkOutput& output, const GroundTruthBatch& tr
     add("offset", config.offset_weight * plane_norm * (r - gt_r).abs().sum());
   }
   if (any_match && (config.plane_chamfer || config.overall_chamfer)) {
-    auto plane_sum = torch::zeros({}, output.points.options());
-    auto overall_sum = torch::zeros({}, output.points.options());
+    // Nearest neighbours per sample without autograd, samples in parallel; then one gather per
+    // term over the whole batch (same value and gradient as a chamfer per matched pair).
+    const auto predicted_rows = output.points.detach().to(torch::kFloat).contiguous();  // (B, M, P, 3)
+    const auto gt_rows = truth.points.detach().to(torch::kFloat).contiguous();          // (B, N, 3)
+    const auto labels = truth.labels.to(torch::kLong).contiguous();
+    const int64_t N = gt_rows.size(1);
+    std::vector<ChamferPairs> plane_pairs(static_cast<std::size_t>(B)), overall_pairs(static_cast<std::size_t>(B));
+    at::parallel_for(0, B, 1, [&](int64_t begin, int64_t end) {
+      for (int64_t b = begin; b < end; ++b) {
+        const auto& columns = result.matching[b];
+        const float* gt = gt_rows.data_ptr<float>() + b * N * 3;
+        const int64_t* label = labels.data_ptr<int64_t>() + b * N;
+        const float* predicted = predicted_rows.data_ptr<float>() + b * M * P * 3;
+        const int64_t gt_base = b * N, predicted_base = b * M * P;
+        if (config.plane_chamfer) {
+          std::vector<std::vector<int64_t>> members(columns.size());  // GT points of each plane
+          for (int64_t q = 0; q < N; ++q)
+            if (label[q] >= 0 && label[q] < static_cast<int64_t>(columns.size())) members[label[q]].push_back(q);
+          std::vector<float> group;
+          for (std::size_t g = 0; g < columns.size(); ++g) {
+            if (columns[g] < 0 || members[g].empty()) continue;  // no GT points: no chamfer term
+            const int64_t n = static_cast<int64_t>(members[g].size());
+            group.resize(static_cast<std::size_t>(n * 3));
+            for (int64_t i = 0; i < n; ++i) std::copy_n(gt + members[g][i] * 3, 3, group.data() + i * 3);
+            std::vector<int64_t> nearest_in_group(static_cast<std::size_t>(P)), nearest_in_plane(static_cast<std::size_t>(n));
+            detail::mutualNearest(predicted + columns[g] * P * 3, P, group.data(), n, nearest_in_group.data(),
+                                  nearest_in_plane.data());
+            const int64_t plane_base = predicted_base + columns[g] * P;
+            for (int64_t p = 0; p < P; ++p)
+              plane_pairs[b].add(plane_base + p, gt_base + members[g][nearest_in_group[p]], 1.0 / P);
+            for (int64_t i = 0; i < n; ++i)
+              plane_pairs[b].add(plane_base + nearest_in_plane[i], gt_base + members[g][i], 1.0 / n);
+          }
+        }
+        if (config.overall_chamfer) {
+          std::vector<int64_t> matched;
+          for (int column : columns)
+            if (column >= 0) matched.push_back(column);
+          if (matched.empty()) continue;
+          const int64_t n = static_cast<int64_t>(matched.size()) * P;
+          std::vector<float> all(static_cast<std::size_t>(n * 3));
+          for (std::size_t i = 0; i < matched.size(); ++i)
+            std::copy_n(predicted + matched[i] * P * 3, P * 3, all.data() + i * P * 3);
+          std::vector<int64_t> nearest_gt(static_cast<std::size_t>(n)), nearest_predicted(static_cast<std::size_t>(N));
+          detail::mutualNearest(all.data(), n, gt, N, nearest_gt.data(), nearest_predicted.data());
+          auto flat = [&](int64_t i) { return predicted_base + matched[i / P] * P + i % P; };
+          for (int64_t i = 0; i < n; ++i) overall_pairs[b].add(flat(i), gt_base + nearest_gt[i], 1.0 / n);
+          for (int64_t q = 0; q < N; ++q) overall_pairs[b].add(flat(nearest_predicted[q]), gt_base + q, 1.0 / N);
+        }
+      }
+    });
+    const auto predicted_flat = output.points.reshape({B * M * P, 3});
+    const auto gt_flat = truth.points.reshape({B * N, 3}).to(output.points.scalar_type());
+    ChamferPairs plane_all, overall_all;
     for (int64_t b = 0; b < B; ++b) {
-      const auto& columns = result.matching[b];
-      const auto groups = pointsOfPlanes(truth.labels[b], static_cast<int>(columns.size()));
-      std::vector<int64_t> matched;
-      for (std::size_t g = 0; g < columns.size(); ++g) {
-        if (columns[g] < 0) continue;
-        matched.push_back(columns[g]);
-        if (config.plane_chamfer && groups[g].size(0) > 0)
-          plane_sum = plane_sum + chamferSquared(output.points[b][columns[g]],
-                                                 truth.points[b].index_select(0, groups[g]));
-      }
-      if (config.overall_chamfer && !matched.empty()) {
-        const auto x = output.points[b].index_select(0, torch::tensor(matched, long_options)).reshape({-1, 3});
-        overall_sum = overall_sum + chamferSquared(x, truth.points[b]);
-      }
+      plane_all.append(plane_pairs[b]);
+      overall_all.append(overall_pairs[b]);
     }
-    if (config.plane_chamfer) add("plane_chamfer", config.plane_chamfer_weight * batch_norm * plane_sum);
-    if (config.overall_chamfer) add("overall_chamfer", config.overall_chamfer_weight * batch_norm * overall_sum);
+    if (config.plane_chamfer)
+      add("plane_chamfer", config.plane_chamfer_weight * batch_norm * pairedSquaredSum(predicted_flat, gt_flat, plane_all));
+    if (config.overall_chamfer)
+      add("overall_chamfer",
+          config.overall_chamfer_weight * batch_norm * pairedSquaredSum(predicted_flat, gt_flat, overall_all));
   }
   if (any_match && config.repulsion && P > config.repulsion_k) {
     const auto x = output.points.reshape({B * M, P, 3}).index_select(0, pred_index);

@@ -2,16 +2,15 @@
 
 #include <paco/common/error.h>
 
+#include "nearest_neighbours.h"
+
+#include <ATen/Parallel.h>
+
 #include <algorithm>
 #include <limits>
 #include <string>
 
 namespace paco::completion {
-namespace {
-// Elements of a temporary distance block: keeps no-grad distance matrices near 64 MB.
-constexpr int64_t kBlockElements = int64_t{1} << 24;
-}  // namespace
-
 Eigen::MatrixXd matchingCost(const NetworkOutput& output, const GroundTruthBatch& truth, int b,
                              const LossConfig& config) {
   torch::NoGradGuard no_grad;
@@ -39,35 +38,19 @@ Eigen::MatrixXd matchingCost(const NetworkOutput& output, const GroundTruthBatch
     cost += config.match_offset_weight * (gt_r.unsqueeze(1) - r.unsqueeze(0)).abs();
   }
   if (config.plane_chamfer) {
-    // Chamfer between every prediction and every GT plane: the GT points are sorted by plane
-    // once, so each plane is a contiguous slice of the distance block; chunks of predictions
-    // bound memory (paper preset: 40 x 1280 points vs 8192).
+    // Chamfer between every prediction and every GT plane on strided subsets (the cost only
+    // ranks pairs): at most match_gt_points GT points and match_points_per_plane per prediction.
     const int64_t all_gt = truth.points.size(1);
     const int64_t gt_stride = config.match_gt_points > 0 ? (all_gt + config.match_gt_points - 1) / config.match_gt_points : 1;
     const int64_t pred_stride =
         config.match_points_per_plane > 0 ? (P + config.match_points_per_plane - 1) / config.match_points_per_plane : 1;
-    const auto y = truth.points[b].slice(0, 0, all_gt, std::max<int64_t>(gt_stride, 1));
-    const auto labels = truth.labels[b].slice(0, 0, all_gt, std::max<int64_t>(gt_stride, 1));
-    const auto predicted = output.points[b].slice(1, 0, P, std::max<int64_t>(pred_stride, 1));
-    const int64_t Ps = predicted.size(1);
-    const int64_t G = y.size(0);
-    const auto y_sorted = y.index_select(0, torch::argsort(labels));
-    const auto counts = torch::bincount(labels, {}, planes);
-    std::vector<int64_t> first(planes + 1, 0);
-    for (int g = 0; g < planes; ++g) first[g + 1] = first[g] + counts[g].item<int64_t>();
-    const int64_t chunk = std::max<int64_t>(1, kBlockElements / (Ps * G));
-    for (int64_t start = 0; start < M; start += chunk) {
-      const int64_t end = std::min(M, start + chunk);
-      const int64_t c = end - start;
-      const auto x = predicted.slice(0, start, end).reshape({c * Ps, 3});
-      const auto d = pairwiseSquaredDistances(x, y_sorted).view({c, Ps, G});
-      for (int g = 0; g < planes; ++g) {
-        if (first[g + 1] == first[g]) continue;  // no GT points: judged by its parameters only
-        const auto dg = d.slice(2, first[g], first[g + 1]);
-        const auto chamfer = std::get<0>(dg.min(2)).mean(1) + std::get<0>(dg.min(1)).mean(1);  // (c)
-        cost[g].slice(0, start, end) += config.match_chamfer_weight * chamfer.to(torch::kDouble);
-      }
-    }
+    const auto y = truth.points[b].slice(0, 0, all_gt, std::max<int64_t>(gt_stride, 1)).to(torch::kFloat).contiguous();
+    const auto labels = truth.labels[b].slice(0, 0, all_gt, std::max<int64_t>(gt_stride, 1)).to(torch::kLong).contiguous();
+    const auto predicted = output.points[b].slice(1, 0, P, std::max<int64_t>(pred_stride, 1)).to(torch::kFloat).contiguous();
+    auto chamfer = torch::empty({planes, M}, torch::kDouble);
+    detail::planeChamferTable(predicted.data_ptr<float>(), M, predicted.size(1), y.data_ptr<float>(),
+                              labels.data_ptr<int64_t>(), y.size(0), planes, chamfer.data_ptr<double>());
+    cost += config.match_chamfer_weight * chamfer;
   }
   if (config.repulsion && P > config.repulsion_k) {
     const auto rep = repulsionLoss(output.points[b], config.repulsion_k, config.repulsion_h,
@@ -83,14 +66,24 @@ Eigen::MatrixXd matchingCost(const NetworkOutput& output, const GroundTruthBatch
 }
 
 Matching matchPredictions(const NetworkOutput& output, const GroundTruthBatch& truth, const LossConfig& config) {
-  Matching matching(truth.batchSize());
-  for (int b = 0; b < truth.batchSize(); ++b) {
-    const Eigen::MatrixXd cost = matchingCost(output, truth, b, config);
-    if (!cost.allFinite())
+  const int B = truth.batchSize();
+  Matching matching(B);
+  std::vector<char> finite(static_cast<std::size_t>(B), 1);
+  // Samples are independent: one per thread (LibTorch ops inside run single-threaded).
+  at::parallel_for(0, B, 1, [&](int64_t begin, int64_t end) {
+    for (int64_t b = begin; b < end; ++b) {
+      const Eigen::MatrixXd cost = matchingCost(output, truth, static_cast<int>(b), config);
+      if (!cost.allFinite()) {
+        finite[b] = 0;
+        continue;
+      }
+      matching[b] = paco::solveAssignment(cost);
+    }
+  });
+  for (int b = 0; b < B; ++b)
+    if (!finite[b])
       throw ModelError("training diverged: the network's predictions for sample " + std::to_string(b) +
                        " are not finite; lower the learning rate or resume from an earlier checkpoint");
-    matching[b] = paco::solveAssignment(cost);
-  }
   return matching;
 }
 

@@ -128,7 +128,27 @@ std::string formatNumber(double value, int precision = 4) {
   return out.str();
 }
 
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace
+
+void StepTimes::add(const StepTimes& other) {
+  load_wait += other.load_wait;
+  forward += other.forward;
+  matching += other.matching;
+  losses += other.losses;
+  backward += other.backward;
+}
+
+std::string StepTimes::summary() const {
+  const double total = load_wait + forward + matching + losses + backward;
+  if (total <= 0.0) return "";
+  auto share = [&](double part) { return std::to_string(static_cast<int>(std::lround(100.0 * part / total))) + "%"; };
+  return "load " + share(load_wait) + " fwd " + share(forward) + " match " + share(matching) + " loss " +
+         share(losses) + " bwd " + share(backward);
+}
 
 std::vector<std::size_t> epochOrder(std::size_t n, std::uint64_t seed, int epoch) {
   std::vector<std::size_t> order(n);
@@ -144,6 +164,7 @@ Trainer::Trainer(TrainerOptions options) : options_(std::move(options)) {
   if (!(options_.learning_rate > 0.0)) throw InvalidInputError("Trainer: learning_rate must be > 0");
   if (options_.weight_decay < 0.0) throw InvalidInputError("Trainer: weight_decay must be >= 0");
   if (options_.prefetch < 1) throw InvalidInputError("Trainer: prefetch must be >= 1");
+  if (options_.checkpoint_every < 0) throw InvalidInputError("Trainer: checkpoint_every must be >= 0");
   if (!(options_.lr_decay > 0.0) || !(options_.lr_decay_epochs > 0.0) || options_.lr_floor < 0.0)
     throw InvalidInputError("Trainer: the lr schedule needs lr_decay > 0, lr_decay_epochs > 0, lr_floor >= 0");
   options_.model.validate();
@@ -184,8 +205,15 @@ void Trainer::setLearningRate(double lr) {
 LossResult Trainer::step(const TrainingBatch& batch) {
   network_->train();
   optimizer_->zero_grad();
+  StepTimes times;
+  auto started = std::chrono::steady_clock::now();
   const NetworkOutput output = network_->forward(batch.input);
+  times.forward = secondsSince(started);
+  started = std::chrono::steady_clock::now();
   LossResult loss = computeLosses(output, batch.truth, options_.loss);
+  times.matching = loss.matching_seconds;
+  times.losses = secondsSince(started) - loss.matching_seconds;
+  started = std::chrono::steady_clock::now();
   const double value = loss.total.item<double>();
   if (!std::isfinite(value))
     throw ModelError("training diverged at step " + std::to_string(step_) +
@@ -193,6 +221,8 @@ LossResult Trainer::step(const TrainingBatch& batch) {
   loss.total.backward();
   if (options_.grad_clip > 0.0) torch::nn::utils::clip_grad_norm_(network_->parameters(), options_.grad_clip);
   optimizer_->step();
+  times.backward = secondsSince(started);
+  last_step_times_ = times;
   ++step_;
   return loss;
 }
@@ -340,10 +370,18 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
     if (options_.show_progress)
       bar.emplace("epoch " + std::to_string(epoch_ + 1) + "/" + std::to_string(options_.epochs), remaining_samples);
     std::size_t samples_done = 0;
+    StepTimes epoch_times;
     {
       Prefetcher loader(train, std::move(batches), std::move(seeds), static_cast<std::size_t>(options_.prefetch));
-      while (auto batch = loader.next()) {
+      for (;;) {
+        const auto wait_started = std::chrono::steady_clock::now();
+        auto batch = loader.next();
+        const double waited = secondsSince(wait_started);
+        if (!batch) break;
         const LossResult loss = step(*batch);
+        StepTimes times = last_step_times_;
+        times.load_wait = waited;
+        epoch_times.add(times);
         ++epoch_batch_;
         samples_done += static_cast<std::size_t>(batch->size());
         epoch_loss_sum_ += loss.total.item<double>();
@@ -351,10 +389,13 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
         if (bar) {
           std::string status = "loss " + formatNumber(loss.total.item<double>());
           for (const auto& [name, value] : loss.terms) status += " " + shortName(name) + " " + formatNumber(value, 3);
+          status += " | " + epoch_times.summary();
           bar->setStatus(status);
           bar->advance(static_cast<std::size_t>(batch->size()));
         }
         if (options_.on_step) options_.on_step(step_);
+        if (options_.checkpoint_every > 0 && step_ % options_.checkpoint_every == 0 && epoch_batch_ < batches_per_epoch)
+          save("last.pt");
         if (interruptRequested()) {
           interrupted_ = true;
           break;
@@ -374,6 +415,7 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
     record.train_loss = epoch_loss_sum_ / batches_done;
     for (const auto& [name, sum] : epoch_term_sums_) record.train_terms[name] = sum / batches_done;
     record.samples_per_second = train_seconds > 0 ? samples_done / train_seconds : 0.0;
+    record.step_times = epoch_times;
     record.val_loss = std::numeric_limits<double>::quiet_NaN();
     if (val.size > 0 && val.load) {
       std::vector<std::vector<std::size_t>> val_batches;

@@ -69,6 +69,7 @@ struct LossResult {
   torch::Tensor total;                  ///< scalar, differentiable
   std::map<std::string, double> terms;  ///< each enabled term, weighted, as added to the total
   Matching matching;                    ///< the assignment used
+  double matching_seconds = 0.0;        ///< wall time of the Hungarian matching (cost + assignment)
 };
 
 /// Squared distances (n, m) between the rows of a (n, 3) and b (m, 3), clamped at 0.

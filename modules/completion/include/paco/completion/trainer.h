@@ -34,6 +34,9 @@ struct TrainerOptions {
   double grad_clip = 10.0;       ///< gradient-norm clipping threshold (<= 0: off)
   std::uint64_t seed = 1;        ///< drives weight init, data order, re-sampling and augmentation
   int prefetch = 3;              ///< batches the background loader prepares ahead (>= 1)
+  /// Also save last.pt every this many steps inside an epoch (0: only at epoch ends and on
+  /// interrupt), so that a killed process loses at most that many steps.
+  int checkpoint_every = 0;
   /// Folder for last.pt, best.pt and training_log.csv (created); empty: nothing is written.
   std::string checkpoint_dir;
   bool show_progress = true;     ///< a progress bar per epoch on stderr
@@ -50,6 +53,18 @@ struct BatchSource {
   std::function<TrainingBatch(const std::vector<std::size_t>& indices, std::uint64_t seed)> load;
 };
 
+/// Where the wall time of training steps went, summed over steps (seconds).
+struct StepTimes {
+  double load_wait = 0.0;  ///< waiting for the background loader (0 when it keeps up)
+  double forward = 0.0;    ///< network forward pass
+  double matching = 0.0;   ///< Hungarian matching (cost matrices + assignment)
+  double losses = 0.0;     ///< loss terms after matching
+  double backward = 0.0;   ///< backward pass, clipping and the AdamW update
+  void add(const StepTimes& other);
+  /// "fwd 38% match 12% ..." shares of the total, for progress lines.
+  std::string summary() const;
+};
+
 /// Numbers of one finished epoch (also the rows of training_log.csv).
 struct EpochRecord {
   int epoch = 0;                          ///< 1-based number of the finished epoch
@@ -61,6 +76,7 @@ struct EpochRecord {
   PlaneMetrics val_metrics;
   double seconds = 0.0;                   ///< wall time of the epoch (training + validation)
   double samples_per_second = 0.0;        ///< training throughput
+  StepTimes step_times;                   ///< where this call's training time went
 };
 
 /// AdamW training of a PacoNetwork with Hungarian-matched losses, background data loading,
@@ -102,6 +118,8 @@ class Trainer {
   /// The scheduled learning rate of an epoch (0-based epoch index).
   double learningRateAt(int epoch) const;
   torch::optim::AdamW& optimizer() { return *optimizer_; }
+  /// Times of the last step() (load_wait is filled in by fit()).
+  const StepTimes& lastStepTimes() const { return last_step_times_; }
 
  private:
   void makeOptimizer();
@@ -117,6 +135,7 @@ class Trainer {
   double best_val_ = 0.0;
   bool has_best_ = false;
   bool interrupted_ = false;
+  StepTimes last_step_times_;
   // Running sums of the current (possibly resumed) epoch, so an interrupted epoch reports right.
   double epoch_loss_sum_ = 0.0;
   std::map<std::string, double> epoch_term_sums_;
