@@ -38,6 +38,9 @@ struct Options {
   double time_limit = 60.0;
   bool dataset_labels = false;
   bool quiet = false;
+  std::string model, completion_frame = "own";
+  double threshold = 0.7;
+  int threads = 1;
 };
 
 void printHelp(const po::options_description& visible) {
@@ -149,6 +152,10 @@ int dataset(const Options& o) {
   b.method.segmenter = o.segmenter;
   b.method.use_dataset_labels = o.dataset_labels;
   b.method.qem_target_faces = o.qem_faces;
+  b.method.model = o.model;
+  b.method.completion_frame = o.completion_frame;
+  b.method.confidence_threshold = o.threshold;
+  b.method.completion_threads = o.threads;
   b.metrics.num_samples = o.samples;
   b.failure_box = failureBoxFromName(o.failure_box);
   paco::InterruptGuard guard;
@@ -186,6 +193,11 @@ int run(int argc, char** argv) {
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct and box-prior")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("qem-faces", po::value(&o.qem_faces)->default_value(o.qem_faces), "poisson-qem: triangles after simplification")
+      ("model", po::value(&o.model), "paco: model file (default: the shipped model)")
+      ("completion-frame", po::value(&o.completion_frame)->default_value(o.completion_frame),
+       "paco: own (the input's own box, as for a user's scan) or complete (the complete shape's frame, the paper's protocol)")
+      ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.7"), "paco: keep completed primitives with confidence above this")
+      ("threads", po::value(&o.threads)->default_value(o.threads), "paco: LibTorch threads")
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");

@@ -9,6 +9,7 @@
 #include <paco/common/blas.h>
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
+#include <paco/completion/checkpoint.h>
 #include <paco/completion/trainer.h>
 #include <paco/data/dataset.h>
 #include <paco/encoding/model_config.h>
@@ -49,10 +50,27 @@ struct Options {
   int prefetch = 3;
   int checkpoint_every = 200;
   bool quiet = false;
+  std::string export_from;
 };
 
+// Writes the network of a training checkpoint without its training state: the file a user loads
+// (a third of the size; the optimizer's moments are not needed for inference).
+int exportModel(const Options& o) {
+  if (fs::exists(o.output) && fs::is_directory(o.output))
+    throw paco::app::UsageError("--export writes a model file; -o '" + o.output + "' is a folder");
+  paco::LoadedCheckpoint checkpoint = paco::loadCheckpoint(o.export_from);
+  paco::saveCheckpoint(o.output, checkpoint.network);
+  std::int64_t parameters = 0;
+  for (const auto& p : checkpoint.network->parameters()) parameters += p.numel();
+  std::printf("exported '%s' (network '%s', %.2f M parameters) to '%s' (%.1f MB)\n", o.export_from.c_str(),
+              checkpoint.config.name.c_str(), parameters / 1e6, o.output.c_str(),
+              static_cast<double>(fs::file_size(o.output)) / 1e6);
+  return 0;
+}
+
 void printHelp(const po::options_description& visible) {
-  std::cout << "Usage: " << kTool << " DATASET_DIR -o CHECKPOINT_DIR [options]\n\n"
+  std::cout << "Usage: " << kTool << " DATASET_DIR -o CHECKPOINT_DIR [options]\n"
+            << "       " << kTool << " --export CHECKPOINT -o MODEL.pt   (the network alone, for paco_reconstruct)\n\n"
             << "Trains the PaCo network on a dataset folder written by paco_dataset. Writes\n"
             << "CHECKPOINT_DIR/last.pt (every epoch, and on Ctrl-C), CHECKPOINT_DIR/best.pt (lowest\n"
             << "validation loss) and CHECKPOINT_DIR/training_log.csv (one row per epoch). Ctrl-C saves\n"
@@ -103,6 +121,7 @@ int run(int argc, char** argv) {
       ("input-points", po::value(&o.input_points)->default_value(o.input_points), "points per input cloud")
       ("gt-points", po::value(&o.gt_points)->default_value(o.gt_points), "GT points per sample")
       ("prefetch", po::value(&o.prefetch)->default_value(o.prefetch), "batches loaded ahead by the background thread")
+      ("export", po::value(&o.export_from), "write the network of this checkpoint (e.g. best.pt) without its training state to -o FILE")
       ("checkpoint-every", po::value(&o.checkpoint_every)->default_value(o.checkpoint_every),
        "also save last.pt every N steps inside an epoch (0 = only at epoch ends), so a killed run loses little")
       ("quiet", po::bool_switch(&o.quiet), "no progress bars");
@@ -114,6 +133,10 @@ int run(int argc, char** argv) {
   if (vm.count("help")) {
     printHelp(visible);
     return 0;
+  }
+  if (!o.export_from.empty()) {
+    if (o.output.empty()) throw paco::app::UsageError("--export needs -o MODEL.pt");
+    return exportModel(o);
   }
   if (o.dataset.empty()) throw paco::app::UsageError("expected DATASET_DIR (a folder written by paco_dataset)");
   if (o.output.empty()) throw paco::app::UsageError("expected -o CHECKPOINT_DIR");

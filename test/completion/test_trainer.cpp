@@ -386,6 +386,15 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
   int rows = -1;  // header
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 2);
+  // --export: the network alone, smaller than the training checkpoint, and loadable as a model.
+  ASSERT_EQ(paco::test::runCommand(tool + " --export " + dir.file("run") + "/best.pt -o " + dir.file("model.pt"), &output), 0)
+      << output;
+  EXPECT_LT(std::filesystem::file_size(dir.file("model.pt")), std::filesystem::file_size(dir.file("run") + "/best.pt"));
+  const paco::LoadedCheckpoint exported = paco::loadCheckpoint(dir.file("model.pt"));
+  EXPECT_FALSE(exported.training_state);
+  EXPECT_EQ(exported.config.toJson(), tinyConfig().toJson());
+  EXPECT_NE(paco::test::runCommand(tool + " --export " + dir.file("missing.pt") + " -o " + dir.file("m2.pt"), &output), 0);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m2.pt")));
   // A bad loss name is a usage error.
   EXPECT_NE(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") +
                                    " --disable-loss chamfer", &output), 0);

@@ -48,7 +48,7 @@ void PlaneProxyEncoder::initCompute() {
 void PlaneProxyEncoder::computeProxies(PlaneProxies& proxies) {
   const auto& cloud = *cloud_;
   const std::int64_t n = static_cast<std::int64_t>(cloud.size());
-  const Normalization normalization = Normalization::fromBoundingBox(cloud);
+  const Normalization normalization = frame_ ? *frame_ : Normalization::fromBoundingBox(cloud);
 
   // The network was trained on num_points_ points: a fixed random subset, or repeats.
   std::vector<std::int64_t> order(static_cast<std::size_t>(n));

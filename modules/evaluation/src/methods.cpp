@@ -9,6 +9,10 @@
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
 #include <paco/segmentation/planar_segmenter.h>
 #endif
+#ifdef PACO_EVALUATION_WITH_COMPLETION
+#include <paco/completion/parametric_completer.h>
+#include <paco/encoding/plane_proxy_encoder.h>
+#endif
 
 #include <pcl/kdtree/kdtree_flann.h>
 
@@ -44,8 +48,8 @@ std::map<std::string, Entry>& registry() {
   return r;
 }
 
-// Primitives of the visible points: from the dataset's labels or from a PlanarSegmenter.
-[[maybe_unused]] std::vector<PlanarPrimitive> visiblePrimitives(const MethodInput& in, const MethodOptions& options, MethodOutput& out) {
+// Segmentation of the visible points: from the dataset's labels or from a PlanarSegmenter.
+[[maybe_unused]] PlanarSegmentation visibleSegmentation(const MethodInput& in, const MethodOptions& options, MethodOutput& out) {
   const auto start = std::chrono::steady_clock::now();
   PlanarSegmentation seg;
   if (options.use_dataset_labels) {
@@ -86,7 +90,11 @@ std::map<std::string, Entry>& registry() {
 #endif
   }
   out.seconds["segment"] = secondsSince(start);
-  return makePrimitives(in.input, seg);
+  return seg;
+}
+
+[[maybe_unused]] std::vector<PlanarPrimitive> visiblePrimitives(const MethodInput& in, const MethodOptions& options, MethodOutput& out) {
+  return makePrimitives(in.input, visibleSegmentation(in, options, out));
 }
 
 [[maybe_unused]] std::vector<PlanarPrimitive> oraclePrimitives(const MethodInput& in) {
@@ -185,6 +193,60 @@ std::map<std::string, Entry>& registry() {
   return out;
 }
 
+#if defined(PACO_EVALUATION_WITH_COMPLETION) && defined(PACO_EVALUATION_WITH_ASSEMBLY)
+// One loaded model per file for the whole run (loading costs far more than one inference).
+CompletionModel::ConstPtr cachedModel(const std::string& path, int threads) {
+  static std::mutex mutex;
+  static std::map<std::string, CompletionModel::ConstPtr> models;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& model = models[path];
+  if (!model) {
+    if (threads > 0) CompletionModel::setThreads(threads);
+    model = CompletionModel::load(path);
+  }
+  return model;
+}
+
+MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
+  if (options.completion_frame != "own" && options.completion_frame != "complete")
+    throw InvalidInputError("completion frame '" + options.completion_frame + "' is not one of: own, complete");
+  const std::string path = options.model.empty() ? CompletionModel::findShippedModel() : options.model;
+  if (path.empty())
+    throw ModelError("the paco method needs a model: none is shipped in this tree; pass --model FILE (paco_train "
+                     "writes best.pt)");
+  const CompletionModel::ConstPtr model = cachedModel(path, options.completion_threads);
+  MethodOutput out;
+  const PlanarSegmentation segmentation = visibleSegmentation(in, options, out);
+  if (segmentation.empty()) {
+    out.reason = FailureReason::NoMesh;
+    out.message = "no planar segment in the input";
+    return out;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(in.input.makeShared());
+  encoder.setSegmentation(segmentation);
+  if (options.completion_frame == "complete") encoder.setFrame(Normalization{});  // already the complete frame
+  PlaneProxies proxies;
+  encoder.encode(proxies);
+  ParametricCompleter completer;
+  completer.setModel(model);
+  completer.setConfidenceThreshold(options.confidence_threshold);
+  completer.setInputProxies(proxies);
+  std::vector<PlanarPrimitive> primitives;
+  completer.complete(primitives);
+  out.seconds["complete"] = secondsSince(start);
+  if (primitives.empty()) {
+    out.reason = FailureReason::NoMesh;
+    out.message = "no completed primitive above the confidence threshold";
+    return out;
+  }
+  assemble(primitives, options, out);
+  return out;
+}
+#endif
+
 MethodOutput runSanity(const MethodInput&, const MethodOptions&) {
   MethodOutput out;
   out.reason = FailureReason::Sanity;
@@ -200,6 +262,9 @@ void registerBuiltins(std::map<std::string, Entry>& r) {
   r.emplace("direct", Entry{runDirect, true});
   r.emplace("oracle", Entry{runOracle, true});
   r.emplace("box-prior", Entry{runBoxPrior, true});
+#endif
+#if defined(PACO_EVALUATION_WITH_COMPLETION) && defined(PACO_EVALUATION_WITH_ASSEMBLY)
+  r.emplace("paco", Entry{runPaco, true});
 #endif
 #ifdef PACO_EVALUATION_WITH_CGAL
   r.emplace("poisson-qem", Entry{runPoissonQem, false});
@@ -241,7 +306,7 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
     auto it = registry().find(name);
     if (it == registry().end()) {
       std::string why = "method '" + name + "' is not available in this build";
-      if (name == "paco") why += ": it needs paco::completion (the learned stages); register it with registerMethod()";
+      if (name == "paco") why += ": it needs paco::completion and paco::assembly (the learned stages and the assembler)";
       else if (name == "direct" || name == "oracle" || name == "box-prior") why += ": it needs paco::assembly (and paco::segmentation)";
       else if (name == "poisson-qem") why += ": it needs CGAL (PACO_WITH_CGAL=ON)";
       else why += "; known methods: direct, oracle, poisson-qem, box-prior, paco, sanity";

@@ -11,6 +11,7 @@
 #include <pcl/point_types.h>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace paco {
@@ -52,6 +53,13 @@ class PlaneProxyEncoder {
   /// Points fed to the network (default 2048, the training size; >= the model's num_centres).
   void setNumPoints(int points) { num_points_ = points; }
   int getNumPoints() const { return num_points_; }
+  /// The user-to-network frame. By default (nothing set) the input's own bounding box: centre at
+  /// the origin, unit diagonal, as paco_reconstruct does for a scan. Set it to evaluate the
+  /// paper's protocol, where the partial input is already in the complete shape's frame (pass
+  /// the identity, Normalization{}). The completed primitives come back in the user's frame.
+  void setFrame(const Normalization& frame) { frame_ = frame; }
+  /// Back to the input's own bounding box.
+  void resetFrame() { frame_.reset(); }
 
   /// Validates the input (InvalidInputError: no/empty cloud, NaN points, labels size mismatch,
   /// no segment; ModelError: no model) then encodes.
@@ -66,6 +74,7 @@ class PlaneProxyEncoder {
   PlanarSegmentation segmentation_;
   CompletionModel::ConstPtr model_;
   int num_points_ = 2048;
+  std::optional<Normalization> frame_;
 };
 
 }  // namespace paco

@@ -47,6 +47,17 @@ struct MethodOptions {
   /// of the input's bounding-box diagonal (defaults 0.02 and 0.05).
   double prior_spacing = 0.02;
   double prior_empty_radius = 0.05;
+  /// paco: the model file (empty: the shipped one, paco::CompletionModel::findShippedModel()).
+  std::string model;
+  /// paco: the frame the network sees. "own" (default): the partial input's own bounding box, as
+  /// paco_reconstruct does for a user's scan. "complete": the sample's frame, i.e. the complete
+  /// shape's box (the paper's protocol, which tells the network where the unseen part ends).
+  std::string completion_frame = "own";
+  /// paco: keep the completed primitives whose confidence is above this (default 0.7, the paper's).
+  double confidence_threshold = 0.7;
+  /// paco: LibTorch threads (process-wide, set when the model is first loaded; default 1, since
+  /// the evaluation runs samples in parallel with --jobs).
+  int completion_threads = 1;
 };
 
 /// What a method produced; runMethod never throws for a failure of the method itself.
@@ -68,7 +79,8 @@ using MethodFunction = std::function<MethodOutput(const MethodInput&, const Meth
 /// built: registerMethod("paco", runPaco, true). `uses_assembler`: it is run once per assembler.
 void registerMethod(const std::string& name, MethodFunction method, bool uses_assembler);
 /// Names of the methods this build can run: direct, oracle, box-prior (need paco::segmentation and
-/// paco::assembly), poisson-qem (needs CGAL), sanity, plus registered ones.
+/// paco::assembly), paco (also needs paco::completion), poisson-qem (needs CGAL), sanity, plus
+/// registered ones.
 std::vector<std::string> availableMethods();
 /// The methods the evaluation knows of, built or not (for messages).
 std::vector<std::string> knownMethods();

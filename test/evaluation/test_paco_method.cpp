@@ -1,0 +1,77 @@
+// The `paco` evaluation method: the full pipeline (segment, encode, complete, assemble) with a
+// model file, in both frames. An untrained tiny model is enough to check the wiring and the
+// failure accounting; the quality of a trained model is measured by paco_eval (doc/results.md).
+#include <paco/common/error.h>
+#include <paco/completion/checkpoint.h>
+#include <paco/evaluation/methods.h>
+
+#include <shapes.h>
+#include <test_support.h>
+#include <tiny_model_config.h>
+
+#include <gtest/gtest.h>
+
+namespace ev = paco::evaluation;
+
+namespace {
+
+// A box seen without its top face, labelled by face (the dataset's labels).
+ev::MethodInput boxWithoutTop() {
+  ev::MethodInput in;
+  const paco::SurfaceMesh box = paco::test::makeBox({-0.3, -0.25, -0.2}, {0.3, 0.25, 0.2});
+  const paco::SurfaceSample s = paco::sampleSurface(box, 3000, 7);
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    if (s.points[i].z() > 0.2 - 1e-6) continue;
+    pcl::PointNormal p;
+    p.getVector3fMap() = s.points[i].cast<float>();
+    p.getNormalVector3fMap() = s.normals[i].cast<float>();
+    in.input.push_back(p);
+    const Eigen::Vector3d& n = s.normals[i];
+    int axis = 0;
+    n.cwiseAbs().maxCoeff(&axis);
+    in.input_labels.push_back(2 * axis + (n[axis] > 0 ? 1 : 0));
+  }
+  return in;
+}
+
+}  // namespace
+
+TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
+  paco::test::TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  const ev::MethodInput in = boxWithoutTop();
+  ev::MethodOptions options;
+  options.model = dir.file("tiny.pt");
+  options.assembler = "cell-complex";
+  options.use_dataset_labels = true;
+  options.confidence_threshold = 0.0;  // an untrained selector: keep every prediction
+  for (const char* frame : {"own", "complete"}) {
+    options.completion_frame = frame;
+    const ev::MethodOutput out = ev::runMethod("paco", in, options);
+    // Untrained, the assembly may or may not close; the pipeline itself must run through.
+    EXPECT_NE(out.reason, ev::FailureReason::Threw) << frame << ": " << out.message;
+    EXPECT_TRUE(out.seconds.count("complete")) << frame;
+    EXPECT_TRUE(out.seconds.count("assemble")) << frame;
+    EXPECT_TRUE(out.has_planes) << frame;
+    EXPECT_EQ(out.planes.size(), static_cast<std::size_t>(paco::test::tinyModelConfig().kept_queries)) << frame;
+  }
+}
+
+TEST(PacoMethod, BadFrameAndMissingModelAreFailuresThatSayWhy) {
+  paco::test::TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  ev::MethodOptions options;
+  options.model = dir.file("tiny.pt");
+  options.use_dataset_labels = true;
+  options.completion_frame = "sideways";
+  ev::MethodOutput out = ev::runMethod("paco", boxWithoutTop(), options);
+  EXPECT_EQ(out.reason, ev::FailureReason::Threw);
+  EXPECT_NE(out.message.find("own, complete"), std::string::npos) << out.message;
+  options.completion_frame = "own";
+  options.model = dir.file("missing.pt");
+  out = ev::runMethod("paco", boxWithoutTop(), options);
+  EXPECT_EQ(out.reason, ev::FailureReason::Threw);
+  EXPECT_NE(out.message.find("missing.pt"), std::string::npos) << out.message;
+}
