@@ -3,6 +3,7 @@
 // ground-truth planes of MFCAD parts. Prints Markdown tables (pasted into doc/assembly.md).
 //   bench_assembly [--glpk-time-limit 10] [--mfcad DIR --mfcad-count 60]
 #include <paco/assembly/polygonal_assembler.h>
+#include <paco/evaluation/metrics.h>
 #include <paco/io/mesh_io.h>
 #include <paco/io/vertex_groups_io.h>
 
@@ -18,6 +19,8 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+
+#include <sys/resource.h>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -33,11 +36,36 @@ struct Config {
 struct Outcome {
   bool ok = false, closed = false, timed_out = false;
   double seconds = 0, cpu_seconds = 0, volume_error = 0;
+  double chamfer = -1;  ///< CD x 100 to the true mesh (-1: no mesh)
   std::size_t planar_faces = 0, planes_used = 0;
   std::string status;
 };
 
-Outcome runOnce(const std::vector<paco::PlanarPrimitive>& primitives, double true_volume, const Config& config) {
+std::string formatChamfer(double chamfer) {
+  if (chamfer < 0) return "-";
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.2f", chamfer);
+  return text;
+}
+
+// CPU seconds of this process and its waited-for children (the MIP solver runs in a child).
+double cpuSeconds() {
+  double total = 0.0;
+  for (int who : {RUSAGE_SELF, RUSAGE_CHILDREN}) {
+    rusage usage{};
+    getrusage(who, &usage);
+    total += usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  }
+  return total;
+}
+
+// Quality against the true surface: the evaluation's CD (x 100, unit-diagonal frame).
+double chamferToTruth(const paco::SurfaceMesh& mesh, const paco::SurfaceMesh& truth) {
+  return paco::evaluation::evaluateMesh(mesh, truth).chamfer;
+}
+
+Outcome runOnce(const std::vector<paco::PlanarPrimitive>& primitives, const paco::SurfaceMesh& truth,
+                double true_volume, const Config& config) {
   paco::PolygonalAssembler assembler;
   assembler.setInputPrimitives(primitives);
   assembler.setBackend(config.backend);
@@ -45,9 +73,9 @@ Outcome runOnce(const std::vector<paco::PlanarPrimitive>& primitives, double tru
   assembler.setTimeLimit(config.time_limit);
   assembler.setMergeDistance(0.0);  // exact primitives: distinct planes stay distinct
   paco::SurfaceMesh mesh;
-  const std::clock_t cpu_start = std::clock();
+  const double cpu_start = cpuSeconds();
   const auto& result = assembler.reconstruct(mesh);
-  const double cpu = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+  const double cpu = cpuSeconds() - cpu_start;
   Outcome outcome;
   outcome.ok = result.ok();
   outcome.seconds = result.seconds;
@@ -59,6 +87,7 @@ Outcome runOnce(const std::vector<paco::PlanarPrimitive>& primitives, double tru
     outcome.closed = paco::analyseTopology(mesh).isClosedManifold();
     outcome.volume_error = std::abs(paco::signedVolume(mesh) - true_volume) / true_volume;
     outcome.planar_faces = paco::test::countPlanarRegions(mesh);
+    outcome.chamfer = chamferToTruth(mesh, truth);
   }
   return outcome;
 }
@@ -125,8 +154,8 @@ int main(int argc, char** argv) {
                                        {"cell-complex", "cell-complex", "cbc", time_limit}};
 
   std::printf("## Generated parts (exact primitives, 8000 points)\n\n");
-  std::printf("| part | planes | backend | wall (s) | CPU (s) | status | closed | volume error | planar faces |\n");
-  std::printf("|---|---:|---|---:|---:|---|---|---:|---:|\n");
+  std::printf("| part | planes | backend | wall (s) | CPU (s) | status | closed | volume error | planar faces | CD to truth |\n");
+  std::printf("|---|---:|---|---:|---:|---|---|---:|---:|---:|\n");
   for (int planes : {10, 20, 30, 40}) {
     struct Part {
       std::string name;
@@ -138,10 +167,10 @@ int main(int argc, char** argv) {
       const auto primitives = paco::test::primitivesOf(part.mesh, 8000);
       const double volume = paco::signedVolume(part.mesh);
       for (const auto& config : configs) {
-        const Outcome o = runOnce(primitives, volume, config);
-        std::printf("| %s | %zu | %s | %.3f | %.3f | %s%s | %s | %.2f %% | %zu |\n", part.name.c_str(),
+        const Outcome o = runOnce(primitives, part.mesh, volume, config);
+        std::printf("| %s | %zu | %s | %.3f | %.3f | %s%s | %s | %.2f %% | %zu | %s |\n", part.name.c_str(),
                     primitives.size(), config.label.c_str(), o.seconds, o.cpu_seconds, o.status.c_str(), o.timed_out ? " (time limit)" : "",
-                    o.closed ? "yes" : "no", 100 * o.volume_error, o.planar_faces);
+                    o.closed ? "yes" : "no", 100 * o.volume_error, o.planar_faces, formatChamfer(o.chamfer).c_str());
         std::fflush(stdout);
       }
     }
@@ -157,10 +186,10 @@ int main(int argc, char** argv) {
     chosen.push_back(files[i * files.size() / mfcad_count]);
 
   std::printf("\n## MFCAD parts (ground-truth planes, 10000 points)\n\n");
-  std::printf("| part | planes | polyfit+cbc wall / CPU (s) | closed | vol. err | cell-complex wall / CPU (s) | closed | vol. err |\n");
-  std::printf("|---|---:|---:|---|---:|---:|---|---:|\n");
+  std::printf("| part | planes | polyfit+cbc wall / CPU (s) | closed | vol. err | CD | cell-complex wall / CPU (s) | closed | vol. err | CD |\n");
+  std::printf("|---|---:|---:|---|---:|---:|---:|---|---:|---:|\n");
   const std::vector<Config> mfcad_configs = {configs[0], configs[2]};
-  std::vector<std::vector<double>> times(2), cpu_times(2);
+  std::vector<std::vector<double>> times(2), cpu_times(2), chamfers(2);
   std::size_t runs = 0;
   std::vector<std::size_t> closed(2, 0), under_goal(2, 0), good_volume(2, 0);
   const double goals[2] = {10.0, 1.0};
@@ -176,24 +205,27 @@ int main(int argc, char** argv) {
                                  paco::io::toVertexGroups(primitives));
     std::printf("| %s | %zu", file.stem().string().c_str(), primitives.size());
     for (std::size_t c = 0; c < 2; ++c) {
-      const Outcome o = runOnce(primitives, volume, mfcad_configs[c]);
+      const Outcome o = runOnce(primitives, mesh, volume, mfcad_configs[c]);
+      if (o.chamfer >= 0) chamfers[c].push_back(o.chamfer);
       times[c].push_back(o.seconds);
       cpu_times[c].push_back(o.cpu_seconds);
       closed[c] += o.ok && o.closed;
       under_goal[c] += o.ok && o.cpu_seconds < goals[c];
       good_volume[c] += o.ok && o.volume_error < 0.01;
-      std::printf(" | %.3f / %.3f | %s | %s", o.seconds, o.cpu_seconds, o.ok ? (o.closed ? "yes" : "no") : o.status.c_str(),
-                  o.ok ? (std::to_string(std::round(1000 * o.volume_error) / 10).substr(0, 5) + " %").c_str() : "-");
+      std::printf(" | %.3f / %.3f | %s | %s | %s", o.seconds, o.cpu_seconds, o.ok ? (o.closed ? "yes" : "no") : o.status.c_str(),
+                  o.ok ? (std::to_string(std::round(1000 * o.volume_error) / 10).substr(0, 5) + " %").c_str() : "-",
+                  formatChamfer(o.chamfer).c_str());
     }
     std::printf(" |\n");
     std::fflush(stdout);
   }
-  std::printf("\n| backend | parts | CPU median (s) | CPU 95th pct (s) | CPU max (s) | wall median (s) | wall max (s) | closed | CPU under goal | volume within 1 %% |\n");
-  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("\n| backend | parts | CPU median (s) | CPU 95th pct (s) | CPU max (s) | wall median (s) | wall max (s) | closed | CPU under goal | volume within 1 %% | CD median | CD max |\n");
+  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (std::size_t c = 0; c < 2; ++c)
-    std::printf("| %s | %zu | %.3f | %.3f | %.3f | %.3f | %.3f | %zu/%zu | %zu/%zu (< %.0f s) | %zu/%zu |\n",
+    std::printf("| %s | %zu | %.3f | %.3f | %.3f | %.3f | %.3f | %zu/%zu | %zu/%zu (< %.0f s) | %zu/%zu | %.2f | %.2f |\n",
                 mfcad_configs[c].label.c_str(), runs, percentile(cpu_times[c], 0.5), percentile(cpu_times[c], 0.95),
                 percentile(cpu_times[c], 1.0), percentile(times[c], 0.5), percentile(times[c], 1.0), closed[c], runs,
-                under_goal[c], runs, goals[c], good_volume[c], runs);
+                under_goal[c], runs, goals[c], good_volume[c], runs, percentile(chamfers[c], 0.5),
+                percentile(chamfers[c], 1.0));
   return 0;
 }

@@ -6,12 +6,16 @@
 // options reach it through a thread-local MipSettings, and the outcome comes back the same way.
 #include <CGAL/Mixed_integer_program_traits.h>
 
+#include <paco/common/child_process.h>
+
 #include <Cbc_C_Interface.h>
 #include <glpk.h>
 
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -20,6 +24,9 @@ namespace paco::detail {
 struct MipSettings {
   double seconds = 60.0;  ///< wall-clock budget of the solve
   bool verbose = false;   ///< let the solver print its log
+  /// Run CBC in a child process: a failed assertion inside Clp (seen on degenerate programs)
+  /// then fails this solve instead of aborting the caller.
+  bool isolate = true;
 };
 
 struct MipOutcome {
@@ -120,51 +127,109 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     outcome.num_variables = static_cast<std::size_t>(program.num_columns);
     outcome.num_constraints = static_cast<std::size_t>(program.num_rows);
 
-    Cbc_Model* model = Cbc_newModel();
-    if (!model) {
-      Base::error_message_ = outcome.message = "CBC: cannot create a model";
-      return false;
-    }
-    const std::vector<CoinBigIndex> column_start(program.column_start.begin(), program.column_start.end());
-    Cbc_loadProblem(model, program.num_columns, program.num_rows, column_start.data(),
-                    program.row_index.data(), program.value.data(), program.column_lower.data(),
-                    program.column_upper.data(), program.objective.data(), program.row_lower.data(),
-                    program.row_upper.data());
-    for (int i = 0; i < program.num_columns; ++i)
-      if (program.is_integer[i]) Cbc_setInteger(model, i);
-    Cbc_setObjSense(model, program.minimize ? 1.0 : -1.0);
     const MipSettings& settings = mipSettings();
-    Cbc_setMaximumSeconds(model, std::max(0.01, settings.seconds));
-    Cbc_setLogLevel(model, settings.verbose ? 1 : 0);
-    if (!settings.verbose) Cbc_setParameter(model, "log", "0");
-    Cbc_solve(model);
-
-    const double* best = Cbc_bestSolution(model);
-    outcome.optimal = Cbc_isProvenOptimal(model) != 0;
-    outcome.hit_time_limit = Cbc_isSecondsLimitReached(model) != 0 || Cbc_secondaryStatus(model) == 4;
+    CbcRun run;
+    if (settings.isolate) {
+      // A hard wall-clock bound as well, in case CBC overruns its own limit.
+      const double grace = std::max(10.0, 0.5 * settings.seconds);
+      const ChildProcessResult child =
+          runInChildProcess([&] { return solveWithCbc(program, settings).serialise(); }, settings.seconds + grace);
+      if (!child.ok || !run.deserialise(child.output, program.num_columns)) {
+        outcome.hit_time_limit = child.timed_out;
+        Base::error_message_ = outcome.message =
+            child.interrupted ? "interrupted"
+                              : "the MIP solver CBC failed (" + (child.ok ? std::string("garbled result") : child.error) +
+                                    "); this case has no solution; --solver glpk may get through";
+        return false;
+      }
+    } else {
+      run = solveWithCbc(program, settings);
+    }
+    outcome.optimal = run.optimal;
+    outcome.hit_time_limit = run.hit_time_limit;
     bool ok = false;
-    if (best) {
+    if (run.has_solution) {
       outcome.has_solution = true;
       Base::result_.resize(program.num_columns);
       for (int i = 0; i < program.num_columns; ++i) {
-        double x = best[i];
+        double x = run.solution[static_cast<std::size_t>(i)];
         if (program.is_integer[i]) x = std::round(x);
         Base::variables_[i]->set_solution_value(x);
         Base::result_[i] = x;
       }
       ok = true;
-    } else if (Cbc_isProvenInfeasible(model)) {
+    } else if (run.infeasible) {
       outcome.message = "CBC: the binary program is infeasible";
     } else if (outcome.hit_time_limit) {
       outcome.message = "CBC found no feasible solution within the time limit of " +
                         std::to_string(settings.seconds) + " s";
     } else {
-      outcome.message = "CBC stopped without a solution (status " + std::to_string(Cbc_status(model)) +
-                        ", secondary status " + std::to_string(Cbc_secondaryStatus(model)) + ")";
+      outcome.message = "CBC stopped without a solution (status " + std::to_string(run.status) +
+                        ", secondary status " + std::to_string(run.secondary_status) + ")";
     }
     Base::error_message_ = outcome.message;
-    Cbc_deleteModel(model);
     return ok;
+  }
+
+ private:
+  // What one CBC solve found, in a form that crosses a pipe.
+  struct CbcRun {
+    bool optimal = false, hit_time_limit = false, has_solution = false, infeasible = false;
+    int status = 0, secondary_status = 0;
+    std::vector<double> solution;
+
+    std::string serialise() const {
+      const int header[6] = {optimal, hit_time_limit, has_solution, infeasible, status, secondary_status};
+      std::string bytes(sizeof(header) + solution.size() * sizeof(double), '\0');
+      std::memcpy(bytes.data(), header, sizeof(header));
+      if (!solution.empty()) std::memcpy(bytes.data() + sizeof(header), solution.data(), solution.size() * sizeof(double));
+      return bytes;
+    }
+    bool deserialise(const std::string& bytes, int columns) {
+      int header[6];
+      if (bytes.size() < sizeof(header)) return false;
+      std::memcpy(header, bytes.data(), sizeof(header));
+      optimal = header[0] != 0;
+      hit_time_limit = header[1] != 0;
+      has_solution = header[2] != 0;
+      infeasible = header[3] != 0;
+      status = header[4];
+      secondary_status = header[5];
+      const std::size_t expected = has_solution ? static_cast<std::size_t>(columns) : 0;
+      if (bytes.size() != sizeof(header) + expected * sizeof(double)) return false;
+      solution.resize(expected);
+      if (expected) std::memcpy(solution.data(), bytes.data() + sizeof(header), expected * sizeof(double));
+      return true;
+    }
+  };
+
+  static CbcRun solveWithCbc(const ColumnProgram<FT>& program, const MipSettings& settings) {
+    CbcRun run;
+    Cbc_Model* model = Cbc_newModel();
+    if (!model) throw std::runtime_error("CBC: cannot create a model");
+    const std::vector<CoinBigIndex> column_start(program.column_start.begin(), program.column_start.end());
+    Cbc_loadProblem(model, program.num_columns, program.num_rows, column_start.data(), program.row_index.data(),
+                    program.value.data(), program.column_lower.data(), program.column_upper.data(),
+                    program.objective.data(), program.row_lower.data(), program.row_upper.data());
+    for (int i = 0; i < program.num_columns; ++i)
+      if (program.is_integer[i]) Cbc_setInteger(model, i);
+    Cbc_setObjSense(model, program.minimize ? 1.0 : -1.0);
+    Cbc_setMaximumSeconds(model, std::max(0.01, settings.seconds));
+    Cbc_setLogLevel(model, settings.verbose ? 1 : 0);
+    if (!settings.verbose) Cbc_setParameter(model, "log", "0");
+    Cbc_solve(model);
+    const double* best = Cbc_bestSolution(model);
+    run.optimal = Cbc_isProvenOptimal(model) != 0;
+    run.hit_time_limit = Cbc_isSecondsLimitReached(model) != 0 || Cbc_secondaryStatus(model) == 4;
+    run.infeasible = Cbc_isProvenInfeasible(model) != 0;
+    run.status = Cbc_status(model);
+    run.secondary_status = Cbc_secondaryStatus(model);
+    if (best) {
+      run.has_solution = true;
+      run.solution.assign(best, best + program.num_columns);
+    }
+    Cbc_deleteModel(model);
+    return run;
   }
 };
 

@@ -1,0 +1,57 @@
+#include <paco/common/child_process.h>
+#include <paco/common/progress.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <stdexcept>
+#include <thread>
+
+TEST(ChildProcess, ReturnsTheBytesOfTheWork) {
+  const std::string big(200000, 'x');  // larger than a pipe buffer
+  const paco::ChildProcessResult r = paco::runInChildProcess([&] { return std::string("ok:") + big; }, 30.0);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(r.output, "ok:" + big);
+  EXPECT_TRUE(r.error.empty());
+}
+
+TEST(ChildProcess, AnAbortFailsTheCallNotTheCaller) {
+  const paco::ChildProcessResult r = paco::runInChildProcess([]() -> std::string { std::abort(); }, 30.0);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("signal 6"), std::string::npos) << r.error;
+}
+
+TEST(ChildProcess, AnExceptionBecomesTheError) {
+  const paco::ChildProcessResult r =
+      paco::runInChildProcess([]() -> std::string { throw std::runtime_error("degenerate program"); }, 30.0);
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.error, "degenerate program");
+}
+
+TEST(ChildProcess, WorkOverTheTimeLimitIsKilled) {
+  const auto started = std::chrono::steady_clock::now();
+  const paco::ChildProcessResult r = paco::runInChildProcess(
+      [] {
+        std::this_thread::sleep_for(std::chrono::seconds(30));
+        return std::string("too late");
+      },
+      0.3);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(r.timed_out);
+  EXPECT_LT(seconds, 10.0);
+}
+
+TEST(ChildProcess, AnInterruptKillsTheChild) {
+  paco::setInterruptRequested(true);
+  const paco::ChildProcessResult r = paco::runInChildProcess(
+      [] {
+        std::this_thread::sleep_for(std::chrono::seconds(30));
+        return std::string("too late");
+      },
+      0.0);
+  paco::setInterruptRequested(false);
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(r.interrupted);
+}
