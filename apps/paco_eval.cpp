@@ -41,6 +41,7 @@ struct Options {
   std::string model, completion_frame = "own";
   double threshold = 0.7;
   int threads = 1;
+  bool no_normals = false;
 };
 
 void printHelp(const po::options_description& visible) {
@@ -156,6 +157,7 @@ int dataset(const Options& o) {
   b.method.completion_frame = o.completion_frame;
   b.method.confidence_threshold = o.threshold;
   b.method.completion_threads = o.threads;
+  b.drop_input_normals = o.no_normals;
   b.metrics.num_samples = o.samples;
   b.failure_box = failureBoxFromName(o.failure_box);
   paco::InterruptGuard guard;
@@ -198,6 +200,7 @@ int run(int argc, char** argv) {
        "paco: own (the input's own box, as for a user's scan) or complete (the complete shape's frame, the paper's protocol)")
       ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.7"), "paco: keep completed primitives with confidence above this")
       ("threads", po::value(&o.threads)->default_value(o.threads), "paco: LibTorch threads")
+      ("no-normals", po::bool_switch(&o.no_normals), "give the methods the input points without normals (they are estimated)")
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");

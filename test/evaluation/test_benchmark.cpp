@@ -124,3 +124,35 @@ TEST(Benchmark, BadOptionsAreErrors) {
   options.levels = {0};
   EXPECT_THROW(ev::runBenchmark(options), paco::IoError);  // no dataset there
 }
+
+TEST(Benchmark, NoNormalsOptionHandsTheMethodsBarePoints) {
+  paco::test::TempDir dir;
+  const std::string split = writeDataset(dir.file("ds"));
+  // A method that reports how many input points carry a normal.
+  ev::registerMethod(
+      "test-count-normals", [](const ev::MethodInput& in, const ev::MethodOptions&) {
+        std::size_t with_normal = 0;
+        for (const auto& p : in.input) with_normal += p.getNormalVector3fMap().squaredNorm() > 0.5f;
+        ev::MethodOutput out;
+        out.reason = ev::FailureReason::NoMesh;
+        out.message = std::to_string(with_normal) + " of " + std::to_string(in.input.size()) + " with normals";
+        return out;
+      },
+      false);
+  ev::BenchmarkOptions options;
+  options.dataset = dir.file("ds");
+  options.split = split;
+  options.methods = {"test-count-normals"};
+  options.levels = {0};
+  options.limit = 1;
+  options.progress = false;
+  options.metrics.num_samples = 500;
+  for (bool drop : {false, true}) {
+    options.drop_input_normals = drop;
+    options.output_dir = dir.file(drop ? "bare" : "with");
+    const ev::BenchmarkRun run = ev::runBenchmark(options);
+    const auto records = ev::readRecords(run.csv_path);
+    ASSERT_EQ(records.size(), 1u);
+    EXPECT_EQ(records[0].message.rfind("0 of ", 0) == 0, drop) << records[0].message;
+  }
+}

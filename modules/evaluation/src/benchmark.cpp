@@ -62,6 +62,8 @@ EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_
                               const Combination& combination, const BenchmarkOptions& options) {
   MethodInput in;
   in.input = sample.input;
+  if (options.drop_input_normals)
+    for (auto& p : in.input) p.normal_x = p.normal_y = p.normal_z = 0.0f;
   in.input_labels = sample.input_labels;
   in.gt_points = sample.gt_points;
   in.gt_labels = sample.gt_labels;

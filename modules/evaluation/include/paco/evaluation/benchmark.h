@@ -28,6 +28,9 @@ struct BenchmarkOptions {
   MethodOptions method;         ///< assembler time limit, segmenter, ...
   MetricOptions metrics;        ///< samples and seeds
   FailureBox failure_box = FailureBox::ReferenceBoundingBox;  ///< what a failure is scored as
+  /// Give the methods the input points without their normals (zeroed), as from a scanner that
+  /// records none: the segmenter then estimates them.
+  bool drop_input_normals = false;
 };
 
 /// What runBenchmark did.
