@@ -2,6 +2,7 @@
 #include <paco/common/progress.h>
 
 #include <gtest/gtest.h>
+#include <test_support.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -54,4 +55,21 @@ TEST(ChildProcess, AnInterruptKillsTheChild) {
   paco::setInterruptRequested(false);
   EXPECT_FALSE(r.ok);
   EXPECT_TRUE(r.interrupted);
+}
+
+TEST(ChildProcess, BufferedOutputOfTheCallerIsNotRepeatedByTheChild) {
+  paco::test::TempDir dir;
+  const std::string path = dir.file("out.txt");
+  FILE* file = std::fopen(path.c_str(), "w");
+  ASSERT_NE(file, nullptr);
+  std::fputs("once\n", file);  // still in the stdio buffer at the fork
+  const paco::ChildProcessResult r = paco::runInChildProcess(
+      [&] {
+        std::fflush(file);  // as a solver flushing its log would
+        return std::string("done");
+      },
+      30.0);
+  std::fclose(file);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(paco::test::readBytes(path), "once\n");
 }

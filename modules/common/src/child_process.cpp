@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 
@@ -55,6 +56,9 @@ ChildProcessResult runInChildProcess(const std::function<std::string()>& work, d
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0)
     throw Error(std::string("cannot create a pipe for a child process: ") + std::strerror(errno));
+  // The child inherits the stdio buffers: flush them first, or output still buffered here would
+  // be written twice if the child flushes (CBC does).
+  std::fflush(nullptr);
   const pid_t pid = ::fork();
   if (pid < 0) {
     const int e = errno;
