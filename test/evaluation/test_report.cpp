@@ -146,3 +146,25 @@ TEST(Markdown, OneTablePerLevelAndOverall) {
   const std::string simple = md.substr(md.find("## Simple"), md.find("## Hard") - md.find("## Simple"));
   EXPECT_LT(simple.find("| direct"), simple.find("| sanity"));
 }
+
+TEST(Markdown, LatencyTableHasMedianAndNinetiethPercentile) {
+  std::vector<ev::EvaluationRecord> rs;
+  // Assembly times 1..10 s: median 5.5, 90th percentile (linear between ranks) 9.1.
+  for (int i = 1; i <= 10; ++i) {
+    ev::EvaluationRecord r = record("direct", "p" + std::to_string(i), i % 3, ev::FailureReason::None, 2.0, 4.0, 0.9);
+    r.seconds = {{"segment", 0.1}, {"assemble", static_cast<double>(i)}, {"total", i + 0.1}};
+    rs.push_back(r);
+  }
+  const ev::Summary s = ev::summarize(rs);
+  EXPECT_DOUBLE_EQ(s.median_seconds.at("assemble"), 5.5);
+  EXPECT_DOUBLE_EQ(s.p90_seconds.at("assemble"), 9.1);
+  rs.push_back(record("sanity", "p1", 0, ev::FailureReason::Sanity, 6.0, 24.0, 0.75));
+  const std::string md = ev::markdownReport(rs);
+  const std::size_t latency = md.find("## Latency");
+  ASSERT_NE(latency, std::string::npos) << md;
+  const std::string section = md.substr(latency);
+  EXPECT_NE(section.find("| Method | Assembler | N | segment | assemble | total |"), std::string::npos) << section;
+  EXPECT_NE(section.find("| direct | polyfit | 10 | 0.100 / 0.100 | 5.500 / 9.100 | 5.600 / 9.200 |"), std::string::npos)
+      << section;
+  EXPECT_EQ(section.find("| sanity"), std::string::npos);  // nothing ran: no latency
+}

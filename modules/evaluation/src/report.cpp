@@ -92,6 +92,16 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// Linear interpolation between the closest ranks (q in [0, 1]).
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const double position = q * static_cast<double>(v.size() - 1);
+  const std::size_t below = static_cast<std::size_t>(position);
+  const std::size_t above = std::min(below + 1, v.size() - 1);
+  return v[below] + (position - static_cast<double>(below)) * (v[above] - v[below]);
+}
+
 std::string cell(double value, int decimals) {
   if (std::isnan(value) || value < -0.5) return "–";
   char buffer[64];
@@ -152,6 +162,41 @@ std::string table(const std::vector<EvaluationRecord>& records) {
     md << " " << (total == s.mean_seconds.end() ? std::string("–") : cell(total->second, 3)) << " |\n";
   }
   return md.str();
+}
+
+// Median and 90th percentile of each stage per (method, assembler), over every level.
+std::string latencyTable(const std::vector<EvaluationRecord>& records) {
+  std::vector<std::pair<std::string, std::string>> order;
+  std::map<std::pair<std::string, std::string>, std::vector<EvaluationRecord>> groups;
+  std::set<std::string> stages_seen;
+  for (const auto& r : records) {
+    if (r.method == "sanity") continue;
+    const auto k = std::make_pair(r.method, r.assembler);
+    if (!groups.count(k)) order.push_back(k);
+    groups[k].push_back(r);
+    for (const auto& [stage, t] : r.seconds)
+      if (stage != "evaluate") stages_seen.insert(stage);
+  }
+  if (order.empty()) return "";
+  std::vector<std::string> stages;
+  for (const auto& s : stageNames()) if (stages_seen.count(s)) stages.push_back(s);
+  std::ostringstream md;
+  md << "## Latency (wall seconds per case: median / 90th percentile, all levels)\n\n| Method | Assembler | N |";
+  for (const auto& s : stages) md << " " << s << " |";
+  md << "\n|---|---|---|";
+  for (std::size_t i = 0; i < stages.size(); ++i) md << "---|";
+  md << "\n";
+  for (const auto& k : order) {
+    const Summary s = summarize(groups[k]);
+    md << "| " << k.first << " | " << k.second << " | " << s.count << " |";
+    for (const auto& stage : stages) {
+      const auto m = s.median_seconds.find(stage);
+      md << " " << (m == s.median_seconds.end() ? std::string("–") : cell(m->second, 3) + " / " + cell(s.p90_seconds.at(stage), 3))
+         << " |";
+    }
+    md << "\n";
+  }
+  return md.str() + "\n";
 }
 
 }  // namespace
@@ -303,7 +348,11 @@ Summary summarize(const std::vector<EvaluationRecord>& records) {
   s.faces = faces.empty() ? 0.0 : mean(faces);
   s.vertices = vertices.empty() ? 0.0 : mean(vertices);
   s.volume_ratio_median = median(volume);
-  for (const auto& [stage, v] : times) s.mean_seconds[stage] = mean(v);
+  for (const auto& [stage, v] : times) {
+    s.mean_seconds[stage] = mean(v);
+    s.median_seconds[stage] = median(v);
+    s.p90_seconds[stage] = percentile(v, 0.9);
+  }
   return s;
 }
 
@@ -319,6 +368,7 @@ std::string markdownReport(const std::vector<EvaluationRecord>& records, const s
   for (const auto& r : records) by_level[r.level].push_back(r);
   for (const auto& [level, rs] : by_level) md << "## " << levelName(level) << "\n\n" << table(rs) << "\n";
   if (by_level.size() > 1 || by_level.empty()) md << "## Overall\n\n" << table(records) << "\n";
+  md << latencyTable(records);
   return md.str();
 }
 

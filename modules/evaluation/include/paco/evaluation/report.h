@@ -85,6 +85,7 @@ struct Summary {
   double faces = 0.0, vertices = 0.0;  ///< means over the succeeded cases
   double volume_ratio_median = std::numeric_limits<double>::quiet_NaN();  ///< median over the succeeded cases
   std::map<std::string, double> mean_seconds;  ///< per stage, over all cases that ran it
+  std::map<std::string, double> median_seconds, p90_seconds;  ///< per stage: median and 90th percentile
   double failureRate() const { return count ? 100.0 * static_cast<double>(failures) / static_cast<double>(count) : 0.0; }
 };
 Summary summarize(const std::vector<EvaluationRecord>& records);
@@ -92,7 +93,9 @@ Summary summarize(const std::vector<EvaluationRecord>& records);
 /// Markdown report: one table per level present (simple / moderate / hard) and one overall, one
 /// row per method and assembler (like the paper's Tables 1, 2 and 4), with FR, CD, HD, NC,
 /// NC_prim, closed-only CD/HD, volume ratio, #f, #v, failures by reason and time per stage.
-/// `title` heads the document; `notes` (may be empty) follows it verbatim.
+/// Then a latency table: median and 90th percentile of each stage's wall time per method and
+/// assembler, over all levels. `title` heads the document; `notes` (may be empty) follows it
+/// verbatim.
 std::string markdownReport(const std::vector<EvaluationRecord>& records, const std::string& title = "Evaluation",
                            const std::string& notes = "");
 
