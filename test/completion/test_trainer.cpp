@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 
@@ -151,6 +152,17 @@ struct ThreadsGuard {  // deterministic arithmetic for the comparisons below
   ~ThreadsGuard() { torch::set_num_threads(previous); }
 };
 
+// Largest absolute difference between the weights of two trainers' networks (infinite when
+// their parameter lists differ).
+double maxWeightDifference(Trainer& a, Trainer& b) {
+  const auto x = a.network()->parameters();
+  const auto y = b.network()->parameters();
+  if (x.size() != y.size()) return std::numeric_limits<double>::infinity();
+  double largest = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) largest = std::max(largest, (x[i] - y[i]).abs().max().item<double>());
+  return largest;
+}
+
 }  // namespace
 
 TEST(Trainer, TinyModelOverfitsOneBatch) {
@@ -240,13 +252,7 @@ TEST(Trainer, ResumeContinuesExactlyAsAnUninterruptedRun) {
   EXPECT_NEAR(records[0].train_loss, straight_records[1].train_loss, 1e-6 * std::abs(straight_records[1].train_loss));
   EXPECT_NEAR(records[0].val_loss, straight_records[1].val_loss, 1e-6 * std::abs(straight_records[1].val_loss));
 
-  const auto a = straight.network()->parameters();
-  const auto b = second.network()->parameters();
-  ASSERT_EQ(a.size(), b.size());
-  double max_difference = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    max_difference = std::max(max_difference, (a[i] - b[i]).abs().max().item<double>());
-  EXPECT_LT(max_difference, 1e-6);
+  EXPECT_LT(maxWeightDifference(straight, second), 1e-6);
 
   // Files: last + best checkpoints and a CSV with a header and one row per finished epoch.
   for (const char* name : {"last.pt", "best.pt", "training_log.csv"})
@@ -289,12 +295,7 @@ TEST(Trainer, PeriodicCheckpointSurvivesAKilledRun) {
   EXPECT_EQ(second.epochBatch(), 2u);
   second.fit(train, val);
   EXPECT_EQ(second.globalStep(), 3);
-  const auto a = straight.network()->parameters();
-  const auto b = second.network()->parameters();
-  double max_difference = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    max_difference = std::max(max_difference, (a[i] - b[i]).abs().max().item<double>());
-  EXPECT_LT(max_difference, 1e-6);
+  EXPECT_LT(maxWeightDifference(straight, second), 1e-6);
   TrainerOptions bad = tinyOptions("");
   bad.checkpoint_every = -1;
   EXPECT_THROW(Trainer{bad}, paco::InvalidInputError);

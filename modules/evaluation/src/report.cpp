@@ -118,20 +118,37 @@ const char* levelName(int level) {
   }
 }
 
-std::string table(const std::vector<EvaluationRecord>& records) {
-  // Rows in order of first appearance of (method, assembler); sanity last.
+// The rows of a table: records grouped by (method, assembler) in order of first appearance, and
+// the stages (in stageNames() order, except `left_out`) that any of them timed.
+struct Rows {
   std::vector<std::pair<std::string, std::string>> order;
   std::map<std::pair<std::string, std::string>, std::vector<EvaluationRecord>> groups;
+  std::vector<std::string> stages;
+};
+
+Rows groupRows(const std::vector<EvaluationRecord>& records, bool with_sanity, const std::string& left_out) {
+  Rows rows;
   std::set<std::string> stages_seen;
   for (const auto& r : records) {
+    if (!with_sanity && r.method == "sanity") continue;
     const auto k = std::make_pair(r.method, r.assembler);
-    if (!groups.count(k)) order.push_back(k);
-    groups[k].push_back(r);
-    for (const auto& [stage, s] : r.seconds) if (stage != "total") stages_seen.insert(stage);
+    if (!rows.groups.count(k)) rows.order.push_back(k);
+    rows.groups[k].push_back(r);
+    for (const auto& [stage, t] : r.seconds)
+      if (stage != left_out) stages_seen.insert(stage);
   }
+  for (const auto& s : stageNames())
+    if (stages_seen.count(s)) rows.stages.push_back(s);
+  return rows;
+}
+
+std::string table(const std::vector<EvaluationRecord>& records) {
+  // Rows in order of first appearance of (method, assembler); sanity last. "total" has its own column.
+  Rows rows = groupRows(records, /*with_sanity=*/true, "total");
+  auto& order = rows.order;
+  auto& groups = rows.groups;
+  const auto& stages = rows.stages;
   std::stable_partition(order.begin(), order.end(), [](const auto& k) { return k.first != "sanity"; });
-  std::vector<std::string> stages;
-  for (const auto& s : stageNames()) if (stages_seen.count(s)) stages.push_back(s);
 
   std::ostringstream md;
   md << "| Method | Assembler | N | FR % | CD | HD | NC | NC_prim | unmatched pred | CD closed | HD closed | "
@@ -166,20 +183,12 @@ std::string table(const std::vector<EvaluationRecord>& records) {
 
 // Median and 90th percentile of each stage per (method, assembler), over every level.
 std::string latencyTable(const std::vector<EvaluationRecord>& records) {
-  std::vector<std::pair<std::string, std::string>> order;
-  std::map<std::pair<std::string, std::string>, std::vector<EvaluationRecord>> groups;
-  std::set<std::string> stages_seen;
-  for (const auto& r : records) {
-    if (r.method == "sanity") continue;
-    const auto k = std::make_pair(r.method, r.assembler);
-    if (!groups.count(k)) order.push_back(k);
-    groups[k].push_back(r);
-    for (const auto& [stage, t] : r.seconds)
-      if (stage != "evaluate") stages_seen.insert(stage);
-  }
+  // Nothing runs for sanity rows, and the metrics' own time is not the method's latency.
+  Rows rows = groupRows(records, /*with_sanity=*/false, "evaluate");
+  const auto& order = rows.order;
+  auto& groups = rows.groups;
+  const auto& stages = rows.stages;
   if (order.empty()) return "";
-  std::vector<std::string> stages;
-  for (const auto& s : stageNames()) if (stages_seen.count(s)) stages.push_back(s);
   std::ostringstream md;
   md << "## Latency (wall seconds per case: median / 90th percentile, all levels)\n\n| Method | Assembler | N |";
   for (const auto& s : stages) md << " " << s << " |";
