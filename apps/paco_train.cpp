@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -51,6 +52,7 @@ struct Options {
   int checkpoint_every = 200;
   bool quiet = false;
   std::string export_from;
+  std::string init_from;
 };
 
 // Writes the network of a training checkpoint without its training state: the file a user loads
@@ -110,6 +112,8 @@ int run(int argc, char** argv) {
       ("limit-train", po::value(&o.limit_train), "use at most N training samples (evenly spaced; 0 = all)")
       ("limit-val", po::value(&o.limit_val), "use at most N validation samples (0 = all)")
       ("resume", po::bool_switch(&o.resume), "continue the run in CHECKPOINT_DIR (last.pt)")
+      ("init-from", po::value(&o.init_from),
+       "start a new run from the weights (and network configuration) of this model, e.g. models/paco_cpu.pt")
       ("seed", po::value(&o.seed)->default_value(o.seed), "seed of weight init, data order and re-sampling")
       ("disable-loss", po::value(&o.disabled_losses)->multitoken(), "switch loss terms off (ablations)")
       ("input-frame", po::value(&o.input_frame)->default_value(o.input_frame),
@@ -152,6 +156,10 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("'" + o.output + "' already holds a run (last.pt); pass --resume to continue it "
                                 "or choose another folder");
 
+  if (o.resume && !o.init_from.empty())
+    throw paco::app::UsageError("--resume and --init-from exclude each other: --resume continues a run, "
+                                "--init-from starts a new one from a model's weights");
+
   torch::set_num_threads(o.threads);
   paco::warnIfSlowBlas();
 
@@ -168,6 +176,10 @@ int run(int argc, char** argv) {
   options.checkpoint_every = o.checkpoint_every;
   options.checkpoint_dir = o.output;
   options.show_progress = !o.quiet;
+
+  // Read the starting model before anything is written, so a bad file leaves no run folder.
+  std::optional<paco::LoadedCheckpoint> initial_model;
+  if (!o.init_from.empty()) initial_model = paco::loadCheckpoint(o.init_from);
 
   auto dataset = std::make_shared<const paco::data::Dataset>(o.dataset);
   paco::completion::CollateOptions collate;
@@ -189,6 +201,12 @@ int run(int argc, char** argv) {
     trainer.resume(last.string());
     std::printf("resumed '%s': epoch %d, step %lld\n", last.string().c_str(), trainer.epoch(),
                 static_cast<long long>(trainer.globalStep()));
+  } else if (initial_model) {
+    if (vm.count("config") || !vm["preset"].defaulted())
+      std::printf("note: --init-from uses the network configuration stored in '%s'; --preset/--config ignored\n",
+                  o.init_from.c_str());
+    trainer.startFrom(*initial_model);
+    std::printf("starting from the weights of '%s'\n", o.init_from.c_str());
   }
   std::int64_t parameters = 0;
   for (const auto& p : trainer.network()->parameters()) parameters += p.numel();

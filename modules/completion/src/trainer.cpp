@@ -264,6 +264,23 @@ void Trainer::saveCheckpoint(const std::string& path) {
   paco::saveCheckpoint(path, network_, &state);
 }
 
+void Trainer::startFrom(const std::string& model_path) { startFrom(paco::loadCheckpoint(model_path)); }
+
+void Trainer::startFrom(const LoadedCheckpoint& model) {
+  options_.model = model.config;
+  network_ = model.network;
+  network_->train();
+  epoch_ = 0;
+  epoch_batch_ = 0;
+  step_ = 0;
+  best_val_ = 0.0;
+  has_best_ = false;
+  epoch_loss_sum_ = 0.0;
+  epoch_term_sums_.clear();
+  // The optimizer held the parameters of the network built in the constructor.
+  makeOptimizer();
+}
+
 void Trainer::resume(const std::string& checkpoint_path) {
   LoadedCheckpoint checkpoint = paco::loadCheckpoint(checkpoint_path);
   if (!checkpoint.training_state)

@@ -4,6 +4,7 @@
 //   paco::completion::Trainer trainer(options);                 // or trainer.resume("runs/cpu/last.pt")
 //   trainer.fit(train_source, val_source);                       // sources: datasetSource(...) or your own
 #include <paco/completion/batch.h>
+#include <paco/completion/checkpoint.h>
 #include <paco/completion/losses.h>
 #include <paco/completion/network.h>
 #include <paco/encoding/model_config.h>
@@ -94,6 +95,14 @@ class Trainer {
   /// position inside the epoch, step, best validation loss and the random generator state.
   /// Throws paco::ModelError when the file is not a training checkpoint.
   void resume(const std::string& checkpoint_path);
+
+  /// Starts a new run from the weights of a model file (an exported model such as
+  /// models/paco_cpu.pt, or any checkpoint): the network configuration and weights come from the
+  /// file, the optimizer, epoch count and step start afresh. This is how training continues
+  /// across machines that keep only the shipped model. Throws paco::ModelError on a bad file.
+  void startFrom(const std::string& model_path);
+  /// The same, from a model already loaded (e.g. checked before any output folder is made).
+  void startFrom(const LoadedCheckpoint& model);
 
   /// One optimisation step on a batch (forward, matching, losses, backward, clipping, AdamW).
   LossResult step(const TrainingBatch& batch);
