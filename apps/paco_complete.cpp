@@ -9,6 +9,7 @@
 
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
+#include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model.h>
 #include <paco/encoding/plane_proxy_encoder.h>
@@ -35,6 +36,7 @@ struct Options {
   std::string segmenter = "gocopp";
   double epsilon = 0.004;
   double threshold = 0.7;
+  bool no_fusion = false;
   int threads = 0;
   int points = 2048;
   bool use_labels = false;
@@ -67,6 +69,8 @@ int run(int argc, char** argv) {
       ("epsilon,e", po::value(&o.epsilon)->default_value(o.epsilon, "0.004"), "segmentation inlier distance, fraction of the bounding-box diagonal")
       ("use-labels", po::bool_switch(&o.use_labels), "use the input file's labels as the segmentation (no segmenter)")
       ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.7"), "keep primitives with confidence above this, in [0, 1]")
+      ("no-fusion", po::bool_switch(&o.no_fusion),
+       "write the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("points", po::value(&o.points)->default_value(o.points), "points fed to the network (the training size)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch threads (0: one per hardware thread)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
@@ -173,6 +177,15 @@ int run(int argc, char** argv) {
   completer.complete(primitives);
   timer.stop();
   std::printf("complete: %zu primitives with confidence > %.2f\n", primitives.size(), o.threshold);
+  if (!o.no_fusion) {
+    timer.start("fuse");
+    paco::ObservedFusionReport fusion;
+    primitives = paco::fuseWithObserved(std::move(primitives), paco::makePrimitives(*cloud, segmentation), {}, &fusion);
+    timer.stop();
+    std::printf("fuse with the seen faces: %zu primitives took a seen plane, %zu duplicates absorbed, %zu seen faces added\n",
+                fusion.snapped, fusion.absorbed,
+                fusion.added);
+  }
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
                  kTool);

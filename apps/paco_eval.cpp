@@ -38,7 +38,7 @@ struct Options {
   double time_limit = 60.0;
   bool dataset_labels = false;
   bool quiet = false;
-  std::string model, completion_frame = "own";
+  std::string model, completion_frame = "own", observed_fusion = "on";
   double threshold = 0.7;
   int threads = 1;
   bool no_normals = false;
@@ -146,6 +146,8 @@ int dataset(const Options& o) {
   b.views = intList(o.views, "views");
   b.limit = o.limit;
   if (o.jobs < 1) throw paco::app::UsageError("--jobs must be at least 1");
+  if (o.observed_fusion != "on" && o.observed_fusion != "off")
+    throw paco::app::UsageError("--observed-fusion must be on or off, got '" + o.observed_fusion + "'");
   b.jobs = o.jobs;
   b.output_dir = o.output_dir;
   b.progress = !o.quiet;
@@ -156,6 +158,7 @@ int dataset(const Options& o) {
   b.method.model = o.model;
   b.method.completion_frame = o.completion_frame;
   b.method.confidence_threshold = o.threshold;
+  b.method.fuse_observed = o.observed_fusion == "on";
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
   b.metrics.num_samples = o.samples;
@@ -200,6 +203,8 @@ int run(int argc, char** argv) {
        "paco: own (the input's own box, as for a user's scan) or complete (the complete shape's frame, the paper's protocol)")
       ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.7"), "paco: keep completed primitives with confidence above this")
       ("threads", po::value(&o.threads)->default_value(o.threads), "paco: LibTorch threads")
+      ("observed-fusion", po::value(&o.observed_fusion)->default_value(o.observed_fusion),
+       "paco: on (seen faces keep their fitted planes and points, the network adds the unseen) or off (the network's primitives alone, as the paper)")
       ("no-normals", po::bool_switch(&o.no_normals), "give the methods the input points without normals (they are estimated)")
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")

@@ -10,6 +10,7 @@
 #include <paco/assembly/polygonal_assembler.h>
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
+#include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model.h>
 #include <paco/encoding/plane_proxy_encoder.h>
@@ -37,6 +38,7 @@ struct Options {
   std::string segmenter = "gocopp";
   std::string model;
   double threshold = 0.7;
+  bool no_fusion = false;
   std::string assembler = "polyfit";
   std::string solver = "cbc";
   double time_limit = 60.0;
@@ -74,6 +76,8 @@ int run(int argc, char** argv) {
       ("model", po::value(&o.model), "model file (default: the shipped model, or $PACO_MODEL)")
       ("no-completion", po::bool_switch(&o.no_completion), "assemble the segments of the input as they are (the direct baseline)")
       ("threshold", po::value(&o.threshold)->default_value(o.threshold), "keep completed primitives with confidence above this, in [0, 1]")
+      ("no-fusion", po::bool_switch(&o.no_fusion),
+       "use the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("assembler", po::value(&o.assembler)->default_value(o.assembler), "polyfit or cell-complex")
       ("solver", po::value(&o.solver)->default_value(o.solver), "MIP solver of polyfit: cbc or glpk")
       ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "assembly time budget in seconds")
@@ -156,6 +160,15 @@ int run(int argc, char** argv) {
     completer.complete(primitives);
     timer.stop();
     std::printf("complete: %zu primitives with confidence > %.2f\n", primitives.size(), o.threshold);
+    if (!o.no_fusion) {
+      timer.start("fuse");
+      paco::ObservedFusionReport fusion;
+      primitives = paco::fuseWithObserved(std::move(primitives), paco::makePrimitives(*cloud, segmentation), {}, &fusion);
+      timer.stop();
+      std::printf("fuse with the seen faces: %zu primitives took a seen plane, %zu duplicates absorbed, %zu seen faces added\n",
+                fusion.snapped, fusion.absorbed,
+                  fusion.added);
+    }
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 

@@ -3,6 +3,14 @@
 // non-zero exit, and no output file at all.
 #include "test_support.h"
 
+#ifdef PACO_TEST_WITH_COMPLETION
+#include <torch/torch.h>  // before PCL-using headers (see doc/training.md)
+
+#include <paco/completion/checkpoint.h>
+
+#include "tiny_model_config.h"
+#endif
+
 #include <paco/common/surface_mesh.h>
 #include <paco/io/cloud_io.h>
 #include <paco/io/mesh_io.h>
@@ -77,6 +85,31 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
   EXPECT_EQ(coloured.points.size(), groups.points.size());
   EXPECT_EQ(filesIn(dir.path()), 4u);  // input + mesh + .vg + .pcd, nothing partial
 }
+
+#ifdef PACO_TEST_WITH_COMPLETION
+// An untrained model with --threshold 1 keeps no completed primitive. With fusion (the default)
+// the seen faces still reach the assembler and the mesh closes; without it nothing is left to
+// assemble, which must be a clear failure that writes nothing.
+TEST(PacoReconstruct, FusionKeepsTheSeenFacesWhenTheNetworkKeepsNothing) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  const std::string base = tool() + " " + quoted(samplePath()) + " --model " + quoted(dir.file("tiny.pt")) +
+                           " --threshold 1 --assembler cell-complex -o ";
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("fused.obj")), &log), 0) << log;
+  EXPECT_NE(log.find("complete: 0 primitives"), std::string::npos) << log;
+  EXPECT_NE(log.find("fuse with the seen faces: 0 primitives took a seen plane"), std::string::npos) << log;
+  const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("fused.obj"));
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+
+  const fs::path out_dir = dir.file("nofusion");
+  fs::create_directories(out_dir);
+  EXPECT_NE(paco::test::runCommand(base + quoted((out_dir / "part.obj").string()) + " --no-fusion", &log), 0);
+  EXPECT_NE(log.find("assembly"), std::string::npos) << log;
+  EXPECT_EQ(filesIn(out_dir), 0u);
+}
+#endif
 
 TEST(PacoReconstruct, TruncatedInputFailsWithoutOutputs) {
   TempDir dir;

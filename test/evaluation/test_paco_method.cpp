@@ -46,6 +46,7 @@ TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
   options.assembler = "cell-complex";
   options.use_dataset_labels = true;
   options.confidence_threshold = 0.0;  // an untrained selector: keep every prediction
+  options.fuse_observed = false;       // the network's primitives alone: one per kept query
   for (const char* frame : {"own", "complete"}) {
     options.completion_frame = frame;
     const ev::MethodOutput out = ev::runMethod("paco", in, options);
@@ -55,6 +56,34 @@ TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
     EXPECT_TRUE(out.seconds.count("assemble")) << frame;
     EXPECT_TRUE(out.has_planes) << frame;
     EXPECT_EQ(out.planes.size(), static_cast<std::size_t>(paco::test::tinyModelConfig().kept_queries)) << frame;
+  }
+}
+
+TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
+  paco::test::TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  ev::MethodOptions options;
+  options.model = dir.file("tiny.pt");
+  options.assembler = "cell-complex";
+  options.use_dataset_labels = true;
+  options.confidence_threshold = 0.0;
+  ASSERT_TRUE(options.fuse_observed);  // the default
+  const ev::MethodOutput out = ev::runMethod("paco", boxWithoutTop(), options);
+  ASSERT_TRUE(out.has_planes) << out.message;
+  const std::size_t queries = static_cast<std::size_t>(paco::test::tinyModelConfig().kept_queries);
+  EXPECT_GE(out.planes.size(), queries);
+  EXPECT_LE(out.planes.size(), queries + 5);
+  // Whether a prediction took it or it was added, each of the five seen faces' fitted planes is
+  // among the assembler's input (the untrained network alone would place them anywhere).
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> faces = {
+      {{-0.3, 0, 0}, {1, 0, 0}}, {{0.3, 0, 0}, {1, 0, 0}}, {{0, -0.25, 0}, {0, 1, 0}},
+      {{0, 0.25, 0}, {0, 1, 0}}, {{0, 0, -0.2}, {0, 0, 1}}};
+  for (const auto& [point, normal] : faces) {
+    bool found = false;
+    for (const paco::Plane& plane : out.planes)
+      found = found || (std::abs(plane.normal.dot(normal)) > 1.0 - 1e-6 && std::abs(plane.signedDistance(point)) < 1e-5);
+    EXPECT_TRUE(found) << "no plane through " << point.transpose() << " with normal " << normal.transpose();
   }
 }
 

@@ -10,6 +10,7 @@
 #include <paco/segmentation/planar_segmenter.h>
 #endif
 #ifdef PACO_EVALUATION_WITH_COMPLETION
+#include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/plane_proxy_encoder.h>
 #endif
@@ -236,6 +237,7 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
   completer.setInputProxies(proxies);
   std::vector<PlanarPrimitive> primitives;
   completer.complete(primitives);
+  if (options.fuse_observed) primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation));
   out.seconds["complete"] = secondsSince(start);
   if (primitives.empty()) {
     out.reason = FailureReason::NoMesh;

@@ -55,6 +55,9 @@ struct MethodOptions {
   std::string completion_frame = "own";
   /// paco: keep the completed primitives whose confidence is above this (default 0.7, the paper's).
   double confidence_threshold = 0.7;
+  /// paco: fuse the completed primitives with the observed segments (paco::fuseWithObserved):
+  /// seen faces keep their fitted planes and points, the network supplies the unseen ones.
+  bool fuse_observed = true;
   /// paco: LibTorch threads (process-wide, set when the model is first loaded; default 1, since
   /// the evaluation runs samples in parallel with --jobs).
   int completion_threads = 1;

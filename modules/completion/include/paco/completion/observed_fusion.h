@@ -1,0 +1,52 @@
+#pragma once
+// Usage:
+//   std::vector<paco::PlanarPrimitive> observed = paco::makePrimitives(*cloud, segmentation);
+//   paco::ObservedFusionReport report;
+//   primitives = paco::fuseWithObserved(std::move(primitives), observed, {}, &report);
+//
+// The network predicts every plane of the complete shape, the seen ones included, from a
+// 2,048-point subsample and a fixed-size latent code; a plane fitted to the observed points of
+// a segment is more accurate than its prediction. Fusion keeps the network for what was not
+// seen and the observation for what was.
+#include <paco/common/primitive.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace paco {
+
+struct ObservedFusionOptions {
+  /// A completed primitive may take an observed segment's plane when their normals are within
+  /// this angle (unoriented, degrees)...
+  double max_angle_degrees = 10.0;
+  /// ...and the observed points lie on average within this distance of the completed plane,
+  /// as a fraction of the bounding-box diagonal of the observed points.
+  double max_distance = 0.02;
+  /// Observed segments with fewer points are ignored (too few to trust their plane).
+  std::size_t min_observed_points = 10;
+};
+
+struct ObservedFusionReport {
+  std::size_t snapped = 0;  ///< completed primitives that took an observed plane
+  std::size_t joined = 0;   ///< further observed segments whose points joined a snapped primitive
+  std::size_t absorbed = 0; ///< further completed primitives of a seen face, merged into the one that took it
+  std::size_t added = 0;    ///< observed segments that matched no completed primitive, added as they are
+  std::size_t ignored = 0;  ///< observed segments below min_observed_points
+};
+
+/// Fuses completed primitives (stage 3's output) with the observed ones (the input's segments,
+/// same frame). Observed segments are taken largest first. Each is matched to the completed
+/// primitive whose plane is nearest to its points within the tolerances; the first match
+/// replaces that primitive's plane by the observed one (keeping the predicted orientation),
+/// projects its predicted points onto it and adds the observed points; later matches to the
+/// same primitive add their points. Other completed primitives within the tolerances of the same
+/// observed segment are duplicates: their points are projected onto the chosen one and they are
+/// removed. Unmatched observed segments are appended with confidence 1; unmatched completed
+/// primitives are kept unchanged. Throws InvalidInputError on tolerances
+/// that are negative or not finite.
+std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
+                                              const std::vector<PlanarPrimitive>& observed,
+                                              const ObservedFusionOptions& options = {},
+                                              ObservedFusionReport* report = nullptr);
+
+}  // namespace paco

@@ -1,0 +1,149 @@
+#include <paco/common/error.h>
+#include <paco/completion/observed_fusion.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace paco {
+namespace {
+
+// A square patch of side `size` on the plane, centred at the plane's point nearest to `centre`,
+// as a k x k grid of points with the plane's normal.
+PlanarPrimitive patch(const Plane& plane, const Eigen::Vector3d& centre, double size, int k, float confidence) {
+  PlanarPrimitive primitive;
+  primitive.plane = plane;
+  primitive.confidence = confidence;
+  const Eigen::Vector3d n = plane.normal;
+  const Eigen::Vector3d u = n.unitOrthogonal();
+  const Eigen::Vector3d v = n.cross(u);
+  const Eigen::Vector3d origin = plane.project(centre);
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) {
+      const Eigen::Vector3d q = origin + size * ((i + 0.5) / k - 0.5) * u + size * ((j + 0.5) / k - 0.5) * v;
+      pcl::PointNormal p;
+      p.x = float(q.x()), p.y = float(q.y()), p.z = float(q.z());
+      p.normal_x = float(n.x()), p.normal_y = float(n.y()), p.normal_z = float(n.z());
+      primitive.points.push_back(p);
+    }
+  return primitive;
+}
+
+double maxDistanceToPlane(const PlanarPrimitive& primitive, const Plane& plane) {
+  double largest = 0.0;
+  for (const auto& p : primitive.points) largest = std::max(largest, std::abs(plane.signedDistance({p.x, p.y, p.z})));
+  return largest;
+}
+
+TEST(ObservedFusion, APredictedPlaneTakesTheObservedPlaneAndPoints) {
+  // Observed: the top z = 1 of a unit-ish part, its normal pointing down (segmenters do not
+  // orient). Predicted: the same face 3° tilted and 0.01 too high, oriented outward (+z).
+  const Plane observed_plane = Plane::fromPointAndNormal({0, 0, 1}, {0, 0, -1});
+  const double tilt = 3.0 * 3.14159265358979 / 180.0;
+  const Plane predicted_plane =
+      Plane::fromPointAndNormal({0, 0, 1.01}, {std::sin(tilt), 0.0, std::cos(tilt)});
+  const std::vector<PlanarPrimitive> observed = {patch(observed_plane, {0, 0, 1}, 1.0, 10, 1.0f)};
+  std::vector<PlanarPrimitive> completed = {patch(predicted_plane, {0, 0, 1}, 1.0, 8, 0.9f)};
+
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  ASSERT_EQ(fused.size(), 1u);
+  EXPECT_EQ(report.snapped, 1u);
+  EXPECT_EQ(report.added, 0u);
+  // The observed plane, with the predicted (outward) orientation.
+  EXPECT_NEAR(fused[0].plane.normal.z(), 1.0, 1e-12);
+  EXPECT_NEAR(fused[0].plane.signedDistance({0, 0, 1}), 0.0, 1e-12);
+  // 64 predicted points moved onto it, plus the 100 observed ones.
+  EXPECT_EQ(fused[0].points.size(), 164u);
+  EXPECT_LT(maxDistanceToPlane(fused[0], fused[0].plane), 1e-6);
+  EXPECT_FLOAT_EQ(fused[0].confidence, 0.9f);
+}
+
+TEST(ObservedFusion, UnseenPredictionsStayAndUnmatchedObservationsAreAdded) {
+  // Observed: x = 0 (seen). Predicted: only x = 1 (the unseen opposite face).
+  const Plane seen = Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0});
+  const Plane hidden = Plane::fromPointAndNormal({1, 0, 0}, {1, 0, 0});
+  const std::vector<PlanarPrimitive> observed = {patch(seen, {0, 0.5, 0.5}, 1.0, 10, 1.0f)};
+  const std::vector<PlanarPrimitive> completed = {patch(hidden, {1, 0.5, 0.5}, 1.0, 8, 0.8f)};
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  ASSERT_EQ(fused.size(), 2u);
+  EXPECT_EQ(report.snapped, 0u);
+  EXPECT_EQ(report.added, 1u);
+  EXPECT_NEAR(fused[0].plane.signedDistance({1, 0, 0}), 0.0, 1e-12);  // unchanged
+  EXPECT_EQ(fused[0].points.size(), 64u);
+  EXPECT_FLOAT_EQ(fused[0].confidence, 0.8f);
+  EXPECT_NEAR(fused[1].plane.signedDistance({0, 0, 0}), 0.0, 1e-12);
+  EXPECT_EQ(fused[1].points.size(), 100u);
+  EXPECT_FLOAT_EQ(fused[1].confidence, 1.0f);
+}
+
+TEST(ObservedFusion, ASplitObservedFaceJoinsOnePrimitiveAndTinySegmentsAreIgnored) {
+  const Plane face = Plane::fromPointAndNormal({0, 0, 0}, {0, 1, 0});
+  // Two observed halves of y = 0 (over-segmentation), one 3-point crumb, and a prediction.
+  std::vector<PlanarPrimitive> observed = {patch(face, {-0.5, 0, 0}, 0.9, 6, 1.0f),
+                                           patch(face, {0.5, 0, 0}, 0.9, 8, 1.0f)};
+  PlanarPrimitive crumb = patch(Plane::fromPointAndNormal({0, 0, 5}, {0, 0, 1}), {0, 0, 5}, 0.1, 1, 1.0f);
+  crumb.points.push_back(crumb.points[0]);
+  crumb.points.push_back(crumb.points[0]);
+  observed.push_back(crumb);
+  const std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0, 0.005, 0}, {0, 1, 0}), {0, 0, 0}, 2.0, 5, 0.95f)};
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  ASSERT_EQ(fused.size(), 1u);
+  EXPECT_EQ(report.snapped, 1u);  // the larger half (64 points) sets the plane
+  EXPECT_EQ(report.joined, 1u);   // the other half (36) adds its points
+  EXPECT_EQ(report.ignored, 1u);
+  EXPECT_EQ(fused[0].points.size(), 25u + 64u + 36u);
+  EXPECT_NEAR(fused[0].plane.signedDistance({0, 0, 0}), 0.0, 1e-12);
+}
+
+TEST(ObservedFusion, DuplicatePredictionsOfASeenFaceAreAbsorbed) {
+  // Two predictions of the seen face z = 0 (one 2° and 0.01 off, one 4° and 0.015 off) and one of
+  // the unseen face z = 1: the seen face ends up once, with the points of both duplicates.
+  const Plane seen = Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1});
+  const double a2 = 2.0 * 3.14159265358979 / 180.0, a4 = 4.0 * 3.14159265358979 / 180.0;
+  const std::vector<PlanarPrimitive> observed = {patch(seen, {0, 0, 0}, 1.0, 10, 1.0f)};
+  const std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0, 0, -0.01}, {std::sin(a2), 0, -std::cos(a2)}), {0, 0, 0}, 1.0, 4, 0.9f),
+      patch(Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1}), {0, 0, 1}, 1.0, 4, 0.85f),
+      patch(Plane::fromPointAndNormal({0, 0, 0.015}, {0, std::sin(a4), -std::cos(a4)}), {0, 0, 0}, 1.0, 5, 0.8f)};
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  ASSERT_EQ(fused.size(), 2u);
+  EXPECT_EQ(report.snapped, 1u);
+  EXPECT_EQ(report.absorbed, 1u);
+  EXPECT_NEAR(fused[0].plane.normal.z(), -1.0, 1e-12);
+  EXPECT_EQ(fused[0].points.size(), 16u + 100u + 25u);
+  EXPECT_LT(maxDistanceToPlane(fused[0], seen), 1e-6);
+  EXPECT_NEAR(fused[1].plane.signedDistance({0, 0, 1}), 0.0, 1e-12);  // the unseen face, unchanged
+}
+
+TEST(ObservedFusion, TolerancesDecideAndBadOptionsAreRejected) {
+  const Plane observed_plane = Plane::fromPointAndNormal({0, 0, 0}, {0, 0, 1});
+  const std::vector<PlanarPrimitive> observed = {patch(observed_plane, {0, 0, 0}, 1.0, 10, 1.0f)};
+  // 15° away: beyond the default 10°, so the observation is added instead of snapped.
+  const double tilt = 15.0 * 3.14159265358979 / 180.0;
+  const std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {std::sin(tilt), 0, std::cos(tilt)}), {0, 0, 0}, 1.0, 4, 0.9f)};
+  ObservedFusionReport report;
+  EXPECT_EQ(fuseWithObserved(completed, observed, {}, &report).size(), 2u);
+  EXPECT_EQ(report.added, 1u);
+  ObservedFusionOptions wide;
+  wide.max_angle_degrees = 20.0;
+  wide.max_distance = 0.1;
+  EXPECT_EQ(fuseWithObserved(completed, observed, wide, &report).size(), 1u);
+  EXPECT_EQ(report.snapped, 1u);
+  ObservedFusionOptions bad;
+  bad.max_distance = -1.0;
+  EXPECT_THROW(fuseWithObserved(completed, observed, bad), InvalidInputError);
+  bad = ObservedFusionOptions{};
+  bad.max_angle_degrees = std::nan("");
+  EXPECT_THROW(fuseWithObserved(completed, observed, bad), InvalidInputError);
+  // Nothing observed: the completion is returned as it is.
+  EXPECT_EQ(fuseWithObserved(completed, {}).size(), 1u);
+}
+
+}  // namespace
+}  // namespace paco
