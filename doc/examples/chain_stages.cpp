@@ -8,6 +8,7 @@
 
 #include <paco/assembly/polygonal_assembler.h>
 #include <paco/common/error.h>
+#include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model.h>
 #include <paco/encoding/plane_proxy_encoder.h>
@@ -51,6 +52,8 @@ int main(int argc, char** argv) {
       completer.setConfidenceThreshold(0.7);
       completer.setInputProxies(proxies);
       completer.complete(primitives);  // in the input's own frame and units
+      // Seen faces keep their fitted planes and points; the network supplies the unseen ones.
+      primitives = paco::fuseWithObserved(std::move(primitives), paco::makePrimitives(*cloud, segmentation));
     } else {
       primitives = paco::makePrimitives(*cloud, segmentation);  // no model: the direct baseline
     }

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Builds the training set of the shipped model and trains it, or continues: the exact recipe of
+# models/README.md. Everything goes under WORK_DIR; rerun the same command after an interruption
+# (the dataset build and the training both resume).
+#
+#   scripts/train-model.sh WORK_DIR [--init-from MODEL.pt] [--epochs N]
+#
+# --init-from starts a new run from a model's weights (e.g. models/paco_cpu.pt, to go on training
+# the shipped model on a machine that kept nothing else); without it a new run starts from random
+# weights. When WORK_DIR/run/last.pt exists the run is resumed and --init-from is ignored.
+# Needs the MFCAD meshes in ../shared/data/mfcad (or MFCAD_DIR) and a Release build in build/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if [ $# -lt 1 ]; then
+  sed -n 2,11p "$0" >&2
+  exit 2
+fi
+work=$1
+shift
+init_from=""
+epochs=100
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --init-from) init_from=$2; shift 2 ;;
+    --epochs) epochs=$2; shift 2 ;;
+    *) echo "train-model.sh: unknown option '$1'" >&2; exit 2 ;;
+  esac
+done
+mfcad=${MFCAD_DIR:-../shared/data/mfcad}
+if [ ! -d "$mfcad" ]; then
+  echo "train-model.sh: no MFCAD meshes in '$mfcad'; set MFCAD_DIR" >&2
+  exit 1
+fi
+for tool in paco_dataset paco_train; do
+  if [ ! -x "build/apps/$tool" ]; then
+    echo "train-model.sh: build/apps/$tool is missing; build first:" >&2
+    echo "  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release && cmake --build build -j2 --target paco_dataset paco_train" >&2
+    exit 1
+  fi
+done
+
+# A third of the MFCAD pool: the meshes whose SHA-1(file name) is 0 mod 3. Since 16 = 1 (mod 3),
+# a hex number is congruent to the sum of its digits.
+subset="$work/mfcad_subset"
+mkdir -p "$subset"
+mfcad_abs=$(cd "$mfcad" && pwd)
+for path in "$mfcad_abs"/*.obj; do
+  name=$(basename "$path")
+  [ -e "$subset/$name" ] && continue
+  hex=$(printf '%s' "$name" | sha1sum | cut -c1-40)
+  sum=0
+  for ((i = 0; i < 40; i++)); do sum=$((sum + 16#${hex:i:1})); done
+  if [ $((sum % 3)) -eq 0 ]; then ln -s "$path" "$subset/$name"; fi
+done
+echo "train-model.sh: $(ls "$subset" | wc -l) meshes in the training subset"
+
+# Anisotropic scale 0.5-2 and rotation per part, 3 levels x 4 views, inputs labelled by GoCoPP
+# (the segmenter the pipeline uses). About 5 min on 2 cores.
+build/apps/paco_dataset "$subset" "$work/data" --augment-scale 0.5,2 --augment-rotate --segment --views 4 \
+  --jobs 2 --seed 1
+
+run="$work/run"
+args=("$work/data" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 --augment-offset 0.05
+      --limit-val 480 --epochs "$epochs" --threads 2 --seed 1 --checkpoint-every 100)
+if [ -e "$run/last.pt" ]; then
+  args+=(--resume)
+elif [ -n "$init_from" ]; then
+  args+=(--init-from "$init_from")
+fi
+exec build/apps/paco_train "${args[@]}"
