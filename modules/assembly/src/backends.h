@@ -16,6 +16,7 @@ struct BackendOutcome {
   bool hit_time_limit = false;
   double seconds_partition = 0.0, seconds_solve = 0.0;
   std::size_t num_candidate_faces = 0, num_cells = 0, num_variables = 0, num_constraints = 0;
+  int crossings_resolved = 0;  ///< cell-complex: cells relabelled to remove non-manifold "X" edges
 };
 
 struct PolyFitOptions {
@@ -31,6 +32,7 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
 struct CellComplexOptions {
   double smoothness = 0.2;
   double extent_margin = 0.02;  ///< in normalised units (diagonal 1)
+  bool resolve_crossings = false;  ///< relabel cells to remove non-manifold "X" edges
   double seconds = 60.0;
 };
 

@@ -257,6 +257,109 @@ struct OutputPolygon {
   std::vector<Eigen::Vector3d> polygon;
 };
 
+// The longest overlap (longer than `min_length`) of a cell edge of `a` with one of `b` on a common
+// line, as its two end points; false when the cells share no edge.
+bool sharedEdge(const Cell& a, const Cell& b, double tolerance, double min_length, Eigen::Vector3d& from,
+                Eigen::Vector3d& to) {
+  double best = min_length;
+  for (const auto& fa : a.faces)
+    for (std::size_t i = 0; i < fa.polygon.size(); ++i) {
+      const Eigen::Vector3d& p = fa.polygon[i];
+      const Eigen::Vector3d d = fa.polygon[(i + 1) % fa.polygon.size()] - p;
+      const double length = d.norm();
+      if (length <= min_length) continue;
+      const Eigen::Vector3d u = d / length;
+      for (const auto& fb : b.faces)
+        for (std::size_t j = 0; j < fb.polygon.size(); ++j) {
+          const Eigen::Vector3d& r = fb.polygon[j];
+          const Eigen::Vector3d& q = fb.polygon[(j + 1) % fb.polygon.size()];
+          if ((r - p).cross(u).norm() > tolerance || (q - p).cross(u).norm() > tolerance) continue;
+          const double tr = (r - p).dot(u), tq = (q - p).dot(u);
+          const double t0 = std::max(0.0, std::min(tr, tq)), t1 = std::min(length, std::max(tr, tq));
+          if (t1 - t0 > best) {
+            best = t1 - t0;
+            from = p + t0 * u;
+            to = p + t1 * u;
+          }
+        }
+    }
+  return best > min_length;
+}
+
+// The part [t0, t1] (arc length from `from`) of the segment (from, to) that an edge of the cell
+// runs along; empty (t0 >= t1) when none does. A convex cell meets a line in one segment, so
+// one interval suffices.
+std::pair<double, double> edgeIntervalAlong(const Cell& cell, const Eigen::Vector3d& from, const Eigen::Vector3d& to,
+                                            double tolerance) {
+  const double length = (to - from).norm();
+  const Eigen::Vector3d u = (to - from) / length;
+  std::pair<double, double> best{0.0, 0.0};
+  for (const auto& f : cell.faces)
+    for (std::size_t j = 0; j < f.polygon.size(); ++j) {
+      const Eigen::Vector3d& r = f.polygon[j];
+      const Eigen::Vector3d& q = f.polygon[(j + 1) % f.polygon.size()];
+      if ((r - from).cross(u).norm() > tolerance || (q - from).cross(u).norm() > tolerance) continue;
+      const double tr = (r - from).dot(u), tq = (q - from).dot(u);
+      const double t0 = std::max(0.0, std::min(tr, tq)), t1 = std::min(length, std::max(tr, tq));
+      if (t1 - t0 > best.second - best.first) best = {t0, t1};
+    }
+  return best;
+}
+
+// A labelling where two inside cells meet only along an edge, between two outside cells (or the
+// reverse), gives a non-manifold edge: four boundary faces on one line, an "X". Each such
+// configuration is removed by flipping the one of its four cells that raises the min-cut energy
+// least; repeated until none is left (bounded: each flip can create others). Returns the flips.
+int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::vector<std::pair<int, double>>>& neighbours,
+                         const std::vector<double>& label_cost_inside, const std::vector<double>& label_cost_outside,
+                         std::vector<bool>& inside) {
+  const int num_cells = static_cast<int>(cells.size());
+  auto adjacent = [&](int x, int y) {
+    for (const auto& [n, w] : neighbours[x])
+      if (n == y) return true;
+    return false;
+  };
+  auto flipCost = [&](int c) {
+    double delta = inside[c] ? label_cost_outside[c] - label_cost_inside[c] : label_cost_inside[c] - label_cost_outside[c];
+    for (const auto& [n, w] : neighbours[c]) delta += inside[n] == inside[c] ? w : -w;
+    return delta;
+  };
+  int flips = 0;
+  const int max_flips = 4 * num_cells + 16;
+  bool changed = true;
+  while (changed && flips < max_flips) {
+    changed = false;
+    for (int a = 0; a < num_cells && !changed; ++a) {
+      for (const auto& [c, wc] : neighbours[a]) {
+        if (inside[c] == inside[a]) continue;
+        for (const auto& [b, wb] : neighbours[c]) {
+          if (b <= a || inside[b] != inside[a] || adjacent(a, b)) continue;
+          // a and b share the label; c (and a d) of the other label touch both.
+          for (const auto& [d, wd] : neighbours[b]) {
+            if (d == c || inside[d] == inside[a] || adjacent(c, d) || !adjacent(a, d)) continue;
+            // The four cells must meet around one common edge (not merely touch elsewhere).
+            Eigen::Vector3d from, to;
+            if (!sharedEdge(cells[a], cells[b], 1e-9, 1e-7, from, to)) continue;
+            const auto along_c = edgeIntervalAlong(cells[c], from, to, 1e-9);
+            const auto along_d = edgeIntervalAlong(cells[d], from, to, 1e-9);
+            if (std::min(along_c.second, along_d.second) - std::max(along_c.first, along_d.first) <= 1e-7) continue;
+            int best = a;
+            for (int x : {b, c, d})
+              if (flipCost(x) < flipCost(best)) best = x;
+            inside[best] = !inside[best];
+            ++flips;
+            changed = true;
+            break;
+          }
+          if (changed) break;
+        }
+        if (changed) break;
+      }
+    }
+  }
+  return flips;
+}
+
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -489,6 +592,20 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
   for (int c = 0; c < num_cells; ++c) {
     inside[c] = get(color, static_cast<Traits::vertex_descriptor>(c)) == black_color;
     num_inside += inside[c];
+  }
+  if (options.resolve_crossings) {
+    std::vector<std::vector<std::pair<int, double>>> neighbours(num_cells);
+    for (const auto& adjacency : adjacencies) {
+      neighbours[adjacency.a].push_back({adjacency.b, beta * adjacency.area});
+      neighbours[adjacency.b].push_back({adjacency.a, beta * adjacency.area});
+    }
+    std::vector<double> label_cost_inside(num_cells), label_cost_outside(num_cells);
+    for (int c = 0; c < num_cells; ++c) {
+      label_cost_inside[c] = cost_inside[c] + beta * box_area[c];
+      label_cost_outside[c] = cost_outside[c];
+    }
+    outcome.crossings_resolved = resolveEdgeCrossings(cells, neighbours, label_cost_inside, label_cost_outside, inside);
+    num_inside = static_cast<int>(std::count(inside.begin(), inside.end(), true));
   }
   if (num_inside == 0) {
     outcome.status = AssemblyStatus::EmptySolution;

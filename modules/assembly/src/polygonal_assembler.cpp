@@ -312,15 +312,20 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     outcome = detail::runPolyFit(primitives, options, mesh);
   } else {
     // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
-    // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x).
+    // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x); as a
+    // last resort relabel one cell at each such edge (the least costly one), which changes the
+    // solid a little but makes it a manifold.
     detail::CellComplexOptions options;
     options.smoothness = smoothness_;
-    for (double factor : {1.0, 2.0, 4.0}) {
+    const std::pair<double, bool> attempts[] = {{1.0, false}, {2.0, false}, {4.0, false}, {1.0, true}};
+    for (const auto& [factor, resolve] : attempts) {
+      if (extent_margin_ == 0.0 && factor != 1.0) continue;
       options.extent_margin = extent_margin_ * factor;
+      options.resolve_crossings = resolve;
       options.seconds = secondsLeft();
       SurfaceMesh attempt;
       detail::BackendOutcome attempt_outcome = detail::runCellComplex(primitives, options, attempt);
-      const bool first = factor == 1.0;
+      const bool first = factor == 1.0 && !resolve;
       if (attempt_outcome.status != AssemblyStatus::Success) {
         if (first) outcome = attempt_outcome, mesh = std::move(attempt);
         break;
@@ -328,7 +333,7 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       SurfaceMesh check = attempt;
       const bool watertight = postProcess(check).isClosedManifold();
       if (first || watertight) outcome = attempt_outcome, mesh = std::move(attempt);
-      if (watertight || extent_margin_ == 0.0 || secondsLeft() <= 0.0) break;
+      if (watertight || secondsLeft() <= 0.0) break;
     }
   }
   result_.solution_is_optimal = outcome.optimal;
@@ -337,6 +342,7 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
   result_.seconds_partition = outcome.seconds_partition;
   result_.seconds_solve = outcome.seconds_solve;
   result_.num_cells = outcome.num_cells;
+  result_.num_crossings_resolved = outcome.crossings_resolved;
   result_.num_variables = outcome.num_variables;
   result_.num_constraints = outcome.num_constraints;
   if (outcome.status != AssemblyStatus::Success) fail(outcome.status, outcome.message);

@@ -70,6 +70,7 @@ struct AssemblyResult {
   bool hit_time_limit = false;         ///< the budget ran out (the best solution found was used)
   std::size_t num_candidate_faces = 0; ///< polyfit: candidate faces; cell-complex: cell faces
   std::size_t num_cells = 0;           ///< cell-complex: cells of the partition
+  int num_crossings_resolved = 0;      ///< cell-complex: cells relabelled to remove non-manifold "X" edges
   std::size_t num_variables = 0, num_constraints = 0;  ///< polyfit: size of the MIP
   MeshTopology topology;               ///< of the output mesh
   double seconds = 0.0;                ///< wall time of reconstruct()
