@@ -37,7 +37,7 @@ struct Options {
   bool no_completion = false;
   std::string segmenter = "gocopp";
   std::string model;
-  double threshold = 0.7;
+  double threshold = 0.8;
   bool no_fusion = false;
   std::string assembler = "polyfit";
   std::string solver = "cbc";
@@ -165,9 +165,7 @@ int run(int argc, char** argv) {
       paco::ObservedFusionReport fusion;
       primitives = paco::fuseWithObserved(std::move(primitives), paco::makePrimitives(*cloud, segmentation), {}, &fusion);
       timer.stop();
-      std::printf("fuse with the seen faces: %zu primitives took a seen plane, %zu duplicates absorbed, %zu seen faces added\n",
-                fusion.snapped, fusion.absorbed,
-                  fusion.added);
+      std::printf("fuse with the seen faces: %s\n", paco::describe(fusion).c_str());
     }
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

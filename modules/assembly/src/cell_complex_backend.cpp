@@ -257,35 +257,6 @@ struct OutputPolygon {
   std::vector<Eigen::Vector3d> polygon;
 };
 
-// The longest overlap (longer than `min_length`) of a cell edge of `a` with one of `b` on a common
-// line, as its two end points; false when the cells share no edge.
-bool sharedEdge(const Cell& a, const Cell& b, double tolerance, double min_length, Eigen::Vector3d& from,
-                Eigen::Vector3d& to) {
-  double best = min_length;
-  for (const auto& fa : a.faces)
-    for (std::size_t i = 0; i < fa.polygon.size(); ++i) {
-      const Eigen::Vector3d& p = fa.polygon[i];
-      const Eigen::Vector3d d = fa.polygon[(i + 1) % fa.polygon.size()] - p;
-      const double length = d.norm();
-      if (length <= min_length) continue;
-      const Eigen::Vector3d u = d / length;
-      for (const auto& fb : b.faces)
-        for (std::size_t j = 0; j < fb.polygon.size(); ++j) {
-          const Eigen::Vector3d& r = fb.polygon[j];
-          const Eigen::Vector3d& q = fb.polygon[(j + 1) % fb.polygon.size()];
-          if ((r - p).cross(u).norm() > tolerance || (q - p).cross(u).norm() > tolerance) continue;
-          const double tr = (r - p).dot(u), tq = (q - p).dot(u);
-          const double t0 = std::max(0.0, std::min(tr, tq)), t1 = std::min(length, std::max(tr, tq));
-          if (t1 - t0 > best) {
-            best = t1 - t0;
-            from = p + t0 * u;
-            to = p + t1 * u;
-          }
-        }
-    }
-  return best > min_length;
-}
-
 // The part [t0, t1] (arc length from `from`) of the segment (from, to) that an edge of the cell
 // runs along; empty (t0 >= t1) when none does. A convex cell meets a line in one segment, so
 // one interval suffices.
@@ -304,6 +275,27 @@ std::pair<double, double> edgeIntervalAlong(const Cell& cell, const Eigen::Vecto
       if (t1 - t0 > best.second - best.first) best = {t0, t1};
     }
   return best;
+}
+
+// The longest overlap (longer than `min_length`) of a cell edge of `a` with one of `b` on a common
+// line, as its two end points; false when the cells share no edge.
+bool sharedEdge(const Cell& a, const Cell& b, double tolerance, double min_length, Eigen::Vector3d& from,
+                Eigen::Vector3d& to) {
+  double best = min_length;
+  for (const auto& f : a.faces)
+    for (std::size_t i = 0; i < f.polygon.size(); ++i) {
+      const Eigen::Vector3d& p = f.polygon[i];
+      const Eigen::Vector3d& q = f.polygon[(i + 1) % f.polygon.size()];
+      if ((q - p).norm() <= min_length) continue;
+      const auto [t0, t1] = edgeIntervalAlong(b, p, q, tolerance);
+      if (t1 - t0 > best) {
+        best = t1 - t0;
+        const Eigen::Vector3d u = (q - p).normalized();
+        from = p + t0 * u;
+        to = p + t1 * u;
+      }
+    }
+  return best > min_length;
 }
 
 // A labelling where two inside cells meet only along an edge, between two outside cells (or the

@@ -48,6 +48,11 @@ double diagonalOf(const std::vector<PlanarPrimitive>& primitives) {
 
 }  // namespace
 
+std::string describe(const ObservedFusionReport& report) {
+  return std::to_string(report.snapped) + " primitives took a seen plane, " + std::to_string(report.absorbed) +
+         " duplicates absorbed, " + std::to_string(report.added) + " seen faces added";
+}
+
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
                                               const std::vector<PlanarPrimitive>& observed,
                                               const ObservedFusionOptions& options, ObservedFusionReport* report) {

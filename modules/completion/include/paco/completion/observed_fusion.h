@@ -11,6 +11,7 @@
 #include <paco/common/primitive.h>
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace paco {
@@ -33,6 +34,9 @@ struct ObservedFusionReport {
   std::size_t added = 0;    ///< observed segments that matched no completed primitive, added as they are
   std::size_t ignored = 0;  ///< observed segments below min_observed_points
 };
+
+/// One line for logs: "N primitives took a seen plane, N duplicates absorbed, N seen faces added".
+std::string describe(const ObservedFusionReport& report);
 
 /// Fuses completed primitives (stage 3's output) with the observed ones (the input's segments,
 /// same frame). Observed segments are taken largest first. Each is matched to the completed
