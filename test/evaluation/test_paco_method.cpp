@@ -34,17 +34,24 @@ ev::MethodInput boxWithoutTop() {
   return in;
 }
 
-}  // namespace
-
-TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
-  paco::test::TempDir dir;
+// Options of the paco method with an untrained tiny model saved in `dir`, the dataset's labels
+// and the cell-complex assembler.
+ev::MethodOptions tinyModelOptions(const paco::test::TempDir& dir) {
   paco::PacoNetwork network(paco::test::tinyModelConfig());
   paco::saveCheckpoint(dir.file("tiny.pt"), network);
-  const ev::MethodInput in = boxWithoutTop();
   ev::MethodOptions options;
   options.model = dir.file("tiny.pt");
   options.assembler = "cell-complex";
   options.use_dataset_labels = true;
+  return options;
+}
+
+}  // namespace
+
+TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
+  paco::test::TempDir dir;
+  const ev::MethodInput in = boxWithoutTop();
+  ev::MethodOptions options = tinyModelOptions(dir);
   options.confidence_threshold = 0.0;  // an untrained selector: keep every prediction
   options.fuse_observed = false;       // the network's primitives alone: one per kept query
   for (const char* frame : {"own", "complete"}) {
@@ -61,12 +68,7 @@ TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
 
 TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
   paco::test::TempDir dir;
-  paco::PacoNetwork network(paco::test::tinyModelConfig());
-  paco::saveCheckpoint(dir.file("tiny.pt"), network);
-  ev::MethodOptions options;
-  options.model = dir.file("tiny.pt");
-  options.assembler = "cell-complex";
-  options.use_dataset_labels = true;
+  ev::MethodOptions options = tinyModelOptions(dir);
   options.confidence_threshold = 0.0;
   ASSERT_TRUE(options.fuse_observed);  // the default
   const ev::MethodOutput out = ev::runMethod("paco", boxWithoutTop(), options);
@@ -89,11 +91,7 @@ TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
 
 TEST(PacoMethod, BadFrameAndMissingModelAreFailuresThatSayWhy) {
   paco::test::TempDir dir;
-  paco::PacoNetwork network(paco::test::tinyModelConfig());
-  paco::saveCheckpoint(dir.file("tiny.pt"), network);
-  ev::MethodOptions options;
-  options.model = dir.file("tiny.pt");
-  options.use_dataset_labels = true;
+  ev::MethodOptions options = tinyModelOptions(dir);
   options.completion_frame = "sideways";
   ev::MethodOutput out = ev::runMethod("paco", boxWithoutTop(), options);
   EXPECT_EQ(out.reason, ev::FailureReason::Threw);
