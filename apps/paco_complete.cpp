@@ -6,10 +6,10 @@
 #include <torch/torch.h>  // before anything that may pull Qt headers (Qt's `slots` breaks LibTorch)
 
 #include "app_support.h"
+#include "fusion_step.h"
 
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
-#include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model.h>
 #include <paco/encoding/plane_proxy_encoder.h>
@@ -177,13 +177,7 @@ int run(int argc, char** argv) {
   completer.complete(primitives);
   timer.stop();
   std::printf("complete: %zu primitives with confidence > %.2f\n", primitives.size(), o.threshold);
-  if (!o.no_fusion) {
-    timer.start("fuse");
-    paco::ObservedFusionReport fusion;
-    primitives = paco::fuseWithObserved(std::move(primitives), paco::makePrimitives(*cloud, segmentation), {}, &fusion);
-    timer.stop();
-    std::printf("fuse with the seen faces: %s\n", paco::describe(fusion).c_str());
-  }
+  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
                  kTool);

@@ -336,8 +336,9 @@ int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::
             const auto along_d = edgeIntervalAlong(cells[d], from, to, 1e-9);
             if (std::min(along_c.second, along_d.second) - std::max(along_c.first, along_d.first) <= 1e-7) continue;
             int best = a;
+            double best_cost = flipCost(a);
             for (int x : {b, c, d})
-              if (flipCost(x) < flipCost(best)) best = x;
+              if (const double cost = flipCost(x); cost < best_cost) best = x, best_cost = cost;
             inside[best] = !inside[best];
             ++flips;
             changed = true;
