@@ -46,7 +46,7 @@ struct Options {
   std::uint64_t seed = 1;
   std::vector<std::string> disabled_losses;
   std::string input_frame = "complete";
-  double augment_scale = 0.0, augment_offset = 0.0;
+  double augment_scale = 0.0, augment_offset = 0.0, augment_jitter = 0.0;
   int input_points = 2048, gt_points = 8192;
   int prefetch = 3;
   int checkpoint_every = 200;
@@ -122,6 +122,8 @@ int run(int argc, char** argv) {
        "random frame scale in [1-s, 1+s] for training samples (0 = off)")
       ("augment-offset", po::value(&o.augment_offset)->default_value(o.augment_offset),
        "random frame shift in [-t, t]^3 for training samples (0 = off)")
+      ("augment-jitter", po::value(&o.augment_jitter)->default_value(o.augment_jitter),
+       "Gaussian noise on training inputs, sigma drawn per sample in [0, j] (normalised units; 0 = off)")
       ("input-points", po::value(&o.input_points)->default_value(o.input_points), "points per input cloud")
       ("gt-points", po::value(&o.gt_points)->default_value(o.gt_points), "GT points per sample")
       ("prefetch", po::value(&o.prefetch)->default_value(o.prefetch), "batches loaded ahead by the background thread")
@@ -149,6 +151,8 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--input-frame must be 'complete' or 'own'");
   if (o.augment_scale < 0.0 || o.augment_scale >= 1.0 || o.augment_offset < 0.0)
     throw paco::app::UsageError("--augment-scale must be in [0, 1) and --augment-offset >= 0");
+  if (!(o.augment_jitter >= 0.0 && o.augment_jitter < 0.2))
+    throw paco::app::UsageError("--augment-jitter must be in [0, 0.2) (a fraction of the unit diagonal)");
   const fs::path last = fs::path(o.output) / "last.pt";
   if (o.resume && !fs::exists(last))
     throw paco::app::UsageError("--resume: '" + last.string() + "' does not exist; start without --resume");
@@ -189,6 +193,7 @@ int run(int argc, char** argv) {
   paco::completion::CollateOptions train_collate = collate;
   train_collate.augment_scale = o.augment_scale;
   train_collate.augment_offset = o.augment_offset;
+  train_collate.augment_jitter = o.augment_jitter;
   const auto train = paco::completion::datasetSource(dataset, paco::data::Split::Train, train_collate, o.limit_train);
   const auto val = paco::completion::datasetSource(dataset, paco::data::Split::Val, collate, o.limit_val);
   if (train.size == 0)

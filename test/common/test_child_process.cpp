@@ -8,6 +8,9 @@
 #include <cstdlib>
 #include <stdexcept>
 #include <thread>
+#include <vector>
+
+#include <omp.h>
 
 TEST(ChildProcess, ReturnsTheBytesOfTheWork) {
   const std::string big(200000, 'x');  // larger than a pipe buffer
@@ -72,4 +75,28 @@ TEST(ChildProcess, BufferedOutputOfTheCallerIsNotRepeatedByTheChild) {
   std::fclose(file);
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_EQ(paco::test::readBytes(path), "once\n");
+}
+
+// libgomp's thread pool does not survive fork(): once the caller has used it (LibTorch does), a
+// parallel region in the child waits forever for threads that are not there. CBC reaches one
+// through LAPACK -> OpenMP OpenBLAS; this hung paco's PolyFit at random.
+TEST(ChildProcess, OpenMpWorkInTheChildAfterTheCallerUsedOpenMp) {
+  omp_set_num_threads(2);
+  std::vector<double> values(1000, 1.0);
+  double sum = 0.0;
+#pragma omp parallel for reduction(+ : sum)
+  for (int i = 0; i < 1000; ++i) sum += values[static_cast<std::size_t>(i)];
+  ASSERT_EQ(sum, 1000.0);
+  const paco::ChildProcessResult r = paco::runInChildProcess(
+      [&] {
+        double child_sum = 0.0;
+#pragma omp parallel for reduction(+ : child_sum)
+        for (int i = 0; i < 1000; ++i) child_sum += 2.0 * values[static_cast<std::size_t>(i)];
+        return std::to_string(child_sum);
+      },
+      20.0);
+  EXPECT_FALSE(r.timed_out) << "the child hung in an OpenMP parallel region";
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(std::stod(r.output), 2000.0);
+  EXPECT_EQ(omp_get_max_threads(), 2);  // the caller keeps its threads
 }

@@ -292,6 +292,27 @@ TEST(Batch, CollateOwnFrameMovesInputAndTruthTogether) {
   EXPECT_NEAR(same.truth.offsets[0][0].item<double>(), 0.0, 1e-6);
 }
 
+TEST(Batch, CollateJitterMovesTheInputOnly) {
+  CollateOptions options;
+  options.input_points = 64;
+  options.gt_points = 150;
+  const TrainingBatch clean = collate({cubeSample()}, options, 5);
+  // The clean input lies on z = 0 or x = 1 exactly.
+  const auto off_plane = [](const torch::Tensor& points) {
+    return torch::minimum(points.select(-1, 2).abs(), (points.select(-1, 0) - 1.0).abs());
+  };
+  EXPECT_LT(off_plane(clean.input.points[0]).max().item<double>(), 1e-6);
+
+  options.augment_jitter = 0.05;
+  const TrainingBatch noisy = collate({cubeSample()}, options, 5);
+  EXPECT_TRUE(torch::equal(noisy.truth.points, clean.truth.points));  // the truth stays put
+  EXPECT_TRUE(torch::equal(noisy.input.labels, clean.input.labels));  // the same points, moved
+  const double spread = off_plane(noisy.input.points[0]).max().item<double>();
+  EXPECT_GT(spread, 1e-4);
+  EXPECT_LT(spread, 5 * 0.05);  // within five sigma of the largest sigma
+  EXPECT_TRUE(torch::equal(noisy.input.points, collate({cubeSample()}, options, 5).input.points));  // repeatable
+}
+
 TEST(Batch, CollateRejectsBrokenSamples) {
   CollateOptions options;
   EXPECT_THROW(collate({}, options, 1), paco::InvalidInputError);

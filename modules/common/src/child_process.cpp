@@ -9,6 +9,7 @@
 #include <cstring>
 #include <exception>
 
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -33,7 +34,18 @@ void writeAll(int fd, const std::string& bytes) {
   }
 }
 
+// libgomp is not fork-safe: the child inherits the bookkeeping of the caller's OpenMP thread pool
+// but not its threads, so its first parallel region waits forever. LibTorch fills that pool, and
+// CBC reaches a parallel region through LAPACK and the OpenMP build of OpenBLAS, which follows
+// omp_get_max_threads(). One thread in the child avoids the pool. Looked up at run time so that
+// paco_common needs no OpenMP of its own; absent OpenMP, there is nothing to do.
+void useOneOpenMpThread() {
+  using SetNumThreads = void (*)(int);
+  if (void* symbol = ::dlsym(RTLD_DEFAULT, "omp_set_num_threads")) reinterpret_cast<SetNumThreads>(symbol)(1);
+}
+
 [[noreturn]] void runChild(int fd, const std::function<std::string()>& work) {
+  useOneOpenMpThread();
   std::string message;
   int code = 0;
   try {

@@ -116,10 +116,18 @@ TrainingBatch collate(const std::vector<paco::data::Sample>& samples, const Coll
     const std::uint64_t sample_seed = seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(b) * 7919u + 1;
     std::mt19937_64 rng(sample_seed);
     const Similarity frame = frameOf(s, options, rng);
+    // A stream of its own, so that jitter changes nothing else of the batch (re-sampling, frame).
+    std::mt19937_64 jitter_rng(sample_seed ^ 0xA5A5A5A5DEADBEEFULL);
+    const double sigma =
+        options.augment_jitter > 0.0 ? std::uniform_real_distribution<double>(0.0, options.augment_jitter)(jitter_rng)
+                                     : 0.0;
+    std::normal_distribution<double> jitter(0.0, 1.0);
     const auto input_index = resampleIndices(static_cast<std::int64_t>(s.input.size()), N, rng());
     for (std::int64_t i = 0; i < N; ++i) {
       const auto& q = s.input[static_cast<std::size_t>(input_index[i])];
-      const Eigen::Vector3d x = frame.apply(Eigen::Vector3d(q.x, q.y, q.z));
+      Eigen::Vector3d x = frame.apply(Eigen::Vector3d(q.x, q.y, q.z));
+      if (sigma > 0.0)
+        for (int k = 0; k < 3; ++k) x[k] += sigma * jitter(jitter_rng);
       for (int k = 0; k < 3; ++k) p[b][i][k] = static_cast<float>(x[k]);
       n[b][i][0] = q.normal_x;
       n[b][i][1] = q.normal_y;

@@ -25,7 +25,8 @@ struct ChildProcessResult {
 /// paco::interruptRequested(). The child leaves with _exit, so no destructor or atexit handler of
 /// the parent's state runs twice. `work` runs on a copy of the memory: its side effects other
 /// than the returned bytes are lost, and it must not rely on other threads (only the forking
-/// thread exists in the child). An exception from `work` becomes `error`. Throws paco::Error only
+/// thread exists in the child; OpenMP runs on one thread there, since libgomp's pool does not
+/// survive fork). An exception from `work` becomes `error`. Throws paco::Error only
 /// when the child cannot be created.
 ChildProcessResult runInChildProcess(const std::function<std::string()>& work, double timeout_seconds);
 

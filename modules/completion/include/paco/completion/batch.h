@@ -52,6 +52,10 @@ struct CollateOptions {
   /// [1 - s, 1 + s] and a translation in [-t, t]³ (normalised units). Applied to input and GT.
   double augment_scale = 0.0;
   double augment_offset = 0.0;
+  /// Gaussian jitter of the input positions only (0 = off), in normalised units: each sample
+  /// draws σ uniformly in [0, augment_jitter], so clean inputs stay in the mix. Scanner-like
+  /// noise; labels and normals stay those of the clean scan, and the truth does not move.
+  double augment_jitter = 0.0;
 };
 
 /// Re-samples `count` indices of [0, n) deterministically from `seed`: a random permutation
