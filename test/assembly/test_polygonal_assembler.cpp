@@ -172,6 +172,55 @@ TEST(CellComplex, SpuriousPlanesStillGiveAClosedManifold) {
   RecordProperty("configurations_needing_relabelling", resolved);
 }
 
+// Spurious patches as a completion network predicts them on CAD parts: near axis-aligned (tilted by
+// up to 5 degrees), centred on a grid, large enough to cross each other and the box. More than
+// four cells then meet along some lines, or cells reach an edge over part of its length, which
+// the four-cell crossing search does not see (seed 6 needs the relabelling of defective edges).
+std::vector<PlanarPrimitive> boxWithAxisAlignedSpuriousPatches(unsigned seed, int patches) {
+  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> axis_of(0, 2), sign_of(0, 1), step(1, 7);
+  std::uniform_real_distribution<double> tilt_angle(-5.0 * M_PI / 180, 5.0 * M_PI / 180);
+  for (int k = 0; k < patches; ++k) {
+    const int axis = axis_of(rng);
+    const Eigen::Matrix3d tilt = (Eigen::AngleAxisd(tilt_angle(rng), Eigen::Vector3d::UnitX()) *
+                                  Eigen::AngleAxisd(tilt_angle(rng), Eigen::Vector3d::UnitY()))
+                                     .toRotationMatrix();
+    const Eigen::Vector3d n = tilt * ((sign_of(rng) ? 1.0 : -1.0) * Eigen::Vector3d::Unit(axis));
+    const Eigen::Vector3d centre(0.125 * step(rng), 0.1 * step(rng), 0.075 * step(rng));
+    const Eigen::Vector3d u = tilt * Eigen::Vector3d::Unit((axis + 1) % 3), v = n.cross(u).normalized();
+    PlanarPrimitive patch;
+    patch.plane = paco::Plane::fromPointAndNormal(centre, n);
+    for (int i = 0; i < 10; ++i)
+      for (int j = 0; j < 10; ++j) {
+        const Eigen::Vector3d x = centre + 0.6 * ((i + 0.5) / 10 - 0.5) * u + 0.6 * ((j + 0.5) / 10 - 0.5) * v;
+        pcl::PointNormal p;
+        p.getVector3fMap() = x.cast<float>();
+        p.getNormalVector3fMap() = n.cast<float>();
+        patch.points.push_back(p);
+      }
+    primitives.push_back(std::move(patch));
+  }
+  return primitives;
+}
+
+TEST(CellComplex, AxisAlignedSpuriousPlanesStillGiveAClosedManifold) {
+  int relabelled = 0;
+  for (unsigned seed = 0; seed < 24; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    paco::PolygonalAssembler assembler;
+    assembler.setBackend("cell-complex");
+    assembler.setInputPrimitives(boxWithAxisAlignedSpuriousPatches(seed, 20));
+    SurfaceMesh mesh;
+    const auto& result = assembler.reconstruct(mesh);
+    ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+    EXPECT_GT(paco::signedVolume(mesh), 0.0);
+    relabelled += result.num_crossings_resolved > 0;
+  }
+  EXPECT_GT(relabelled, 0);  // the set does exercise the last resort
+}
+
 TEST(Assembler, PolygonMeshOutputAndCloudInputAgree) {
   const SurfaceMesh truth = paco::test::makeChamferedCube();
   const auto primitives = primitivesOf(truth);

@@ -24,6 +24,9 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
 #include <numeric>
 #include <vector>
 
@@ -357,6 +360,110 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// Two cells meeting on a primitive's plane, and the polygon they share.
+struct Adjacency {
+  int a, b;  // a: cell whose face has sign +1
+  double area;
+  std::vector<Eigen::Vector3d> polygon;  // counter-clockwise around the plane normal
+  int plane;
+};
+
+// The boundary between inside and outside cells (and inside cells against the box), welded and
+// without T-junctions.
+SurfaceMesh extractBoundary(const std::vector<Cell>& cells, const std::vector<Adjacency>& adjacencies,
+                            const std::vector<bool>& inside, int num_primitives) {
+  std::vector<OutputPolygon> polygons;
+  for (const auto& adjacency : adjacencies) {
+    if (inside[adjacency.a] == inside[adjacency.b]) continue;
+    OutputPolygon out{adjacency.polygon};
+    if (inside[adjacency.b]) std::reverse(out.polygon.begin(), out.polygon.end());  // outward from b is -normal
+    polygons.push_back(std::move(out));
+  }
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    if (!inside[c]) continue;
+    for (const auto& f : cells[c].faces)
+      if (f.plane >= num_primitives) polygons.push_back(OutputPolygon{f.polygon});
+  }
+  // Shared corners and no T-junctions; merging into one polygon per plane region follows in
+  // cleanUpPolygonMesh (called by PolygonalAssembler for every backend).
+  SurfaceMesh mesh;
+  for (const auto& p : polygons) {
+    std::vector<std::uint32_t> face;
+    for (const auto& x : p.polygon) {
+      face.push_back(static_cast<std::uint32_t>(mesh.vertices.size()));
+      mesh.vertices.push_back(x);
+    }
+    mesh.faces.push_back(std::move(face));
+  }
+  weldVertices(mesh, kWeldTolerance);
+  insertTJunctionVertices(mesh, 10 * kWeldTolerance);
+  return mesh;
+}
+
+// Defects left once PolygonalAssembler has finished the mesh (it separates sheets that touch, for
+// one, so the raw mesh's pinched vertices do not count).
+std::size_t defectsAfterFinishing(SurfaceMesh mesh) {
+  if (mesh.faces.empty()) return std::numeric_limits<std::size_t>::max();
+  const MeshTopology t = finishAssembledMesh(mesh);
+  return t.boundary_edges + t.non_manifold_edges + t.inconsistent_edges + t.non_manifold_vertices;
+}
+
+// Edges of the mesh used by one face or by more than two: where the surface is open or pinched.
+std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> defectiveEdges(const SurfaceMesh& mesh) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+  for (const auto& face : mesh.faces)
+    for (std::size_t i = 0; i < face.size(); ++i) {
+      const std::uint32_t u = face[i], v = face[(i + 1) % face.size()];
+      ++uses[{std::min(u, v), std::max(u, v)}];
+    }
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> edges;
+  for (const auto& [edge, count] : uses)
+    if (count != 2) edges.push_back({mesh.vertices[edge.first], mesh.vertices[edge.second]});
+  return edges;
+}
+
+// What the X-pattern search cannot see (more than four cells around an edge, cells reaching an
+// edge over part of its length): flips, one at a time, a cell along a defective edge of the
+// extracted surface, the one raising the min-cut energy least among those that reduce the
+// defects, until the surface is a closed manifold or no flip helps. Returns the flips.
+int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjacency>& adjacencies, int num_primitives,
+                        const std::function<double(int)>& flip_cost, std::vector<bool>& inside) {
+  int flips = 0;
+  SurfaceMesh mesh = extractBoundary(cells, adjacencies, inside, num_primitives);
+  std::size_t defects = defectsAfterFinishing(mesh);
+  for (int round = 0; defects > 0 && round < 32; ++round) {
+    std::vector<int> candidates;
+    for (const auto& [from, to] : defectiveEdges(mesh)) {
+      if ((to - from).norm() < 1e-12) continue;
+      for (int c = 0; c < static_cast<int>(cells.size()); ++c) {
+        const auto [t0, t1] = edgeIntervalAlong(cells[c], from, to, 1e-7);
+        if (t1 - t0 > 1e-9) candidates.push_back(c);
+      }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::vector<std::pair<double, int>> by_cost;
+    for (int c : candidates) by_cost.push_back({flip_cost(c), c});
+    std::sort(by_cost.begin(), by_cost.end());
+    bool improved = false;
+    for (const auto& [cost, c] : by_cost) {
+      inside[c] = !inside[c];
+      SurfaceMesh attempt = extractBoundary(cells, adjacencies, inside, num_primitives);
+      const std::size_t attempt_defects = defectsAfterFinishing(attempt);
+      if (attempt_defects < defects) {
+        mesh = std::move(attempt);
+        defects = attempt_defects;
+        ++flips;
+        improved = true;
+        break;
+      }
+      inside[c] = !inside[c];
+    }
+    if (!improved) break;
+  }
+  return flips;
+}
+
 }  // namespace
 
 BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, const CellComplexOptions& options,
@@ -492,12 +599,6 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
     std::vector<Vertex2> polygon;  // counter-clockwise in the plane frame
     Eigen::Vector2d lo, hi;
   };
-  struct Adjacency {
-    int a, b;  // a: cell whose face has sign +1
-    double area;
-    std::vector<Eigen::Vector3d> polygon;  // counter-clockwise around the plane normal
-    int plane;
-  };
   std::vector<std::vector<FaceRef>> by_plane(planes.size());
   for (int c = 0; c < num_cells; ++c)
     for (const auto& f : cells[c].faces) {
@@ -598,6 +699,12 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
       label_cost_outside[c] = cost_outside[c];
     }
     outcome.crossings_resolved = resolveEdgeCrossings(cells, neighbours, label_cost_inside, label_cost_outside, inside);
+    auto flip_cost = [&](int c) {
+      double delta = inside[c] ? label_cost_outside[c] - label_cost_inside[c] : label_cost_inside[c] - label_cost_outside[c];
+      for (const auto& [n, w] : neighbours[c]) delta += inside[n] == inside[c] ? w : -w;
+      return delta;
+    };
+    outcome.crossings_resolved += repairByRelabelling(cells, adjacencies, num_primitives, flip_cost, inside);
     num_inside = static_cast<int>(std::count(inside.begin(), inside.end(), true));
   }
   if (num_inside == 0) {
@@ -606,32 +713,7 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
     return outcome;
   }
 
-  // The boundary between inside and outside cells (and inside cells against the box).
-  std::vector<OutputPolygon> polygons;
-  for (const auto& adjacency : adjacencies) {
-    if (inside[adjacency.a] == inside[adjacency.b]) continue;
-    OutputPolygon out{adjacency.polygon};
-    if (inside[adjacency.b]) std::reverse(out.polygon.begin(), out.polygon.end());  // outward from b is -normal
-    polygons.push_back(std::move(out));
-  }
-  for (int c = 0; c < num_cells; ++c) {
-    if (!inside[c]) continue;
-    for (const auto& f : cells[c].faces)
-      if (f.plane >= num_primitives) polygons.push_back(OutputPolygon{f.polygon});
-  }
-
-  // Shared corners and no T-junctions; merging into one polygon per plane region follows in
-  // cleanUpPolygonMesh (called by PolygonalAssembler for every backend).
-  for (const auto& p : polygons) {
-    std::vector<std::uint32_t> face;
-    for (const auto& x : p.polygon) {
-      face.push_back(static_cast<std::uint32_t>(mesh.vertices.size()));
-      mesh.vertices.push_back(x);
-    }
-    mesh.faces.push_back(std::move(face));
-  }
-  weldVertices(mesh, kWeldTolerance);
-  insertTJunctionVertices(mesh, 10 * kWeldTolerance);
+  mesh = extractBoundary(cells, adjacencies, inside, num_primitives);
   outcome.seconds_solve = secondsSince(start) - outcome.seconds_partition;
   return outcome;
 }

@@ -291,4 +291,13 @@ void cleanUpPolygonMesh(SurfaceMesh& mesh) {
   splitNonManifold(mesh);
 }
 
+MeshTopology finishAssembledMesh(SurfaceMesh& mesh) {
+  // CGAL's output repeats vertices, and the cell complex computes shared corners more than once.
+  weldVertices(mesh, 1e-7);
+  orientConsistently(mesh);
+  if (signedVolume(mesh) < 0.0) flipFaces(mesh);
+  cleanUpPolygonMesh(mesh);
+  return analyseTopology(mesh);
+}
+
 }  // namespace paco::detail

@@ -17,4 +17,8 @@ void orientConsistently(SurfaceMesh& mesh);
 /// at a vertex by duplicating the shared vertices (so the result is manifold).
 void cleanUpPolygonMesh(SurfaceMesh& mesh);
 
+/// What PolygonalAssembler does to every backend's raw output: welds (1e-7), orients the faces
+/// consistently and outward, cleans up (cleanUpPolygonMesh). Returns the final topology.
+MeshTopology finishAssembledMesh(SurfaceMesh& mesh);
+
 }  // namespace paco::detail

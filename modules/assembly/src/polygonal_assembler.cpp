@@ -198,14 +198,7 @@ void PolygonalAssembler::setExtentMargin(double fraction) {
   extent_margin_ = fraction;
 }
 
-MeshTopology PolygonalAssembler::postProcess(SurfaceMesh& mesh) {
-  // CGAL's output repeats vertices, and the cell complex computes shared corners more than once.
-  weldVertices(mesh, 1e-7);
-  detail::orientConsistently(mesh);
-  if (signedVolume(mesh) < 0.0) flipFaces(mesh);
-  detail::cleanUpPolygonMesh(mesh);
-  return analyseTopology(mesh);
-}
+MeshTopology PolygonalAssembler::postProcess(SurfaceMesh& mesh) { return detail::finishAssembledMesh(mesh); }
 
 double PolygonalAssembler::secondsLeft() const { return time_limit_ - (nowSeconds() - start_time_); }
 
