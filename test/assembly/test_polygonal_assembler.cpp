@@ -129,6 +129,24 @@ TEST(CellComplex, BoxGivesSixQuads) {
   EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 1e-9);
 }
 
+// A square primitive of 10 x 10 points centred at `centre`, spanned by the unit vectors u and v
+// (its normal u x v), `size` wide.
+PlanarPrimitive squarePatch(const Eigen::Vector3d& centre, const Eigen::Vector3d& u, const Eigen::Vector3d& v,
+                            double size) {
+  const Eigen::Vector3d n = u.cross(v).normalized();
+  PlanarPrimitive patch;
+  patch.plane = paco::Plane::fromPointAndNormal(centre, n);
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 10; ++j) {
+      const Eigen::Vector3d x = centre + size * ((i + 0.5) / 10 - 0.5) * u + size * ((j + 0.5) / 10 - 0.5) * v;
+      pcl::PointNormal p;
+      p.getVector3fMap() = x.cast<float>();
+      p.getNormalVector3fMap() = n.cast<float>();
+      patch.points.push_back(p);
+    }
+  return patch;
+}
+
 // A box plus spurious patches: small square pieces of random planes, with outward-looking normals
 // in random directions, the kind of primitives a poorly trained completion adds. The cell complex
 // must still return a closed manifold (relabelling a cell at a non-manifold edge if it must).
@@ -139,18 +157,8 @@ std::vector<PlanarPrimitive> boxWithSpuriousPatches(unsigned seed, int patches) 
   for (int k = 0; k < patches; ++k) {
     const Eigen::Vector3d n = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
     const Eigen::Vector3d centre(0.5 + 0.4 * unit(rng), 0.4 + 0.3 * unit(rng), 0.3 + 0.2 * unit(rng));
-    const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-    PlanarPrimitive patch;
-    patch.plane = paco::Plane::fromPointAndNormal(centre, n);
-    for (int i = 0; i < 10; ++i)
-      for (int j = 0; j < 10; ++j) {
-        const Eigen::Vector3d x = centre + 0.3 * ((i + 0.5) / 10 - 0.5) * u + 0.3 * ((j + 0.5) / 10 - 0.5) * v;
-        pcl::PointNormal p;
-        p.getVector3fMap() = x.cast<float>();
-        p.getNormalVector3fMap() = n.cast<float>();
-        patch.points.push_back(p);
-      }
-    primitives.push_back(std::move(patch));
+    const Eigen::Vector3d u = n.unitOrthogonal();
+    primitives.push_back(squarePatch(centre, u, n.cross(u), 0.3));
   }
   return primitives;
 }
@@ -188,18 +196,8 @@ std::vector<PlanarPrimitive> boxWithAxisAlignedSpuriousPatches(unsigned seed, in
                                      .toRotationMatrix();
     const Eigen::Vector3d n = tilt * ((sign_of(rng) ? 1.0 : -1.0) * Eigen::Vector3d::Unit(axis));
     const Eigen::Vector3d centre(0.125 * step(rng), 0.1 * step(rng), 0.075 * step(rng));
-    const Eigen::Vector3d u = tilt * Eigen::Vector3d::Unit((axis + 1) % 3), v = n.cross(u).normalized();
-    PlanarPrimitive patch;
-    patch.plane = paco::Plane::fromPointAndNormal(centre, n);
-    for (int i = 0; i < 10; ++i)
-      for (int j = 0; j < 10; ++j) {
-        const Eigen::Vector3d x = centre + 0.6 * ((i + 0.5) / 10 - 0.5) * u + 0.6 * ((j + 0.5) / 10 - 0.5) * v;
-        pcl::PointNormal p;
-        p.getVector3fMap() = x.cast<float>();
-        p.getNormalVector3fMap() = n.cast<float>();
-        patch.points.push_back(p);
-      }
-    primitives.push_back(std::move(patch));
+    const Eigen::Vector3d u = tilt * Eigen::Vector3d::Unit((axis + 1) % 3);
+    primitives.push_back(squarePatch(centre, u, n.cross(u).normalized(), 0.6));
   }
   return primitives;
 }
