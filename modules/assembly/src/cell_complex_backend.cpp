@@ -306,18 +306,12 @@ bool sharedEdge(const Cell& a, const Cell& b, double tolerance, double min_lengt
 // configuration is removed by flipping the one of its four cells that raises the min-cut energy
 // least; repeated until none is left (bounded: each flip can create others). Returns the flips.
 int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::vector<std::pair<int, double>>>& neighbours,
-                         const std::vector<double>& label_cost_inside, const std::vector<double>& label_cost_outside,
-                         std::vector<bool>& inside) {
+                         const std::function<double(int)>& flip_cost, std::vector<bool>& inside) {
   const int num_cells = static_cast<int>(cells.size());
   auto adjacent = [&](int x, int y) {
     for (const auto& [n, w] : neighbours[x])
       if (n == y) return true;
     return false;
-  };
-  auto flipCost = [&](int c) {
-    double delta = inside[c] ? label_cost_outside[c] - label_cost_inside[c] : label_cost_inside[c] - label_cost_outside[c];
-    for (const auto& [n, w] : neighbours[c]) delta += inside[n] == inside[c] ? w : -w;
-    return delta;
   };
   int flips = 0;
   const int max_flips = 4 * num_cells + 16;
@@ -339,9 +333,9 @@ int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::
             const auto along_d = edgeIntervalAlong(cells[d], from, to, 1e-9);
             if (std::min(along_c.second, along_d.second) - std::max(along_c.first, along_d.first) <= 1e-7) continue;
             int best = a;
-            double best_cost = flipCost(a);
+            double best_cost = flip_cost(a);
             for (int x : {b, c, d})
-              if (const double cost = flipCost(x); cost < best_cost) best = x, best_cost = cost;
+              if (const double cost = flip_cost(x); cost < best_cost) best = x, best_cost = cost;
             inside[best] = !inside[best];
             ++flips;
             changed = true;
@@ -698,12 +692,13 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
       label_cost_inside[c] = cost_inside[c] + beta * box_area[c];
       label_cost_outside[c] = cost_outside[c];
     }
-    outcome.crossings_resolved = resolveEdgeCrossings(cells, neighbours, label_cost_inside, label_cost_outside, inside);
+    // How much the min-cut energy rises when cell c changes label (under the current labels).
     auto flip_cost = [&](int c) {
       double delta = inside[c] ? label_cost_outside[c] - label_cost_inside[c] : label_cost_inside[c] - label_cost_outside[c];
       for (const auto& [n, w] : neighbours[c]) delta += inside[n] == inside[c] ? w : -w;
       return delta;
     };
+    outcome.crossings_resolved = resolveEdgeCrossings(cells, neighbours, flip_cost, inside);
     outcome.crossings_resolved += repairByRelabelling(cells, adjacencies, num_primitives, flip_cost, inside);
     num_inside = static_cast<int>(std::count(inside.begin(), inside.end(), true));
   }
