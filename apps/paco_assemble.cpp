@@ -79,7 +79,7 @@ std::vector<paco::PlanarPrimitive> loadPrimitives(const std::string& path) {
 int run(int argc, char** argv) {
   std::string input, output, backend = kDefaultBackend, solver = kDefaultSolver;
   double time_limit = kDefaultTimeLimit, fitting = 0.43, coverage = 0.27, complexity = 0.30, smoothness = 0.2;
-  std::size_t min_support = 10;
+  std::size_t min_support = 10, max_candidate_faces = paco::PolygonalAssembler::kDefaultMaxCandidateFaces;
   double merge_distance = 0.005, merge_angle = 2.0;
   po::options_description options("Options");
   options.add_options()
@@ -98,6 +98,8 @@ int run(int argc, char** argv) {
        "merge near-duplicate planes closer than this angle (degrees) ...")
       ("merge-distance", po::value(&merge_distance)->default_value(0.005, "0.005"),
        "... and this mean point distance (fraction of the diagonal; 0: never merge)")
+      ("max-candidate-faces", po::value(&max_candidate_faces)->default_value(max_candidate_faces),
+       "polyfit: leave out the least confident primitives (confidence < 1) until the candidate faces fit (0: no limit)")
       ("verbose,v", "print the MIP solver's log");
   po::options_description hidden;
   hidden.add_options()("input", po::value(&input));
@@ -128,6 +130,7 @@ int run(int argc, char** argv) {
     assembler.setMinSupport(min_support);
     assembler.setMergeAngle(merge_angle * 3.14159265358979323846 / 180.0);
     assembler.setMergeDistance(merge_distance);
+    assembler.setMaxCandidateFaces(max_candidate_faces);
   } catch (const paco::InvalidInputError& e) {
     throw paco::app::UsageError(e.what());
   }
@@ -145,7 +148,8 @@ int run(int argc, char** argv) {
   const paco::AssemblyResult& result = assembler.reconstruct(mesh);
   timer.stop();
   if (result.num_merged || result.num_dropped)
-    std::printf("pre-processing: %zu planes merged as near-duplicates, %zu dropped for too few points\n",
+    std::printf("pre-processing: %zu planes merged as near-duplicates, %zu dropped (too few points, or over the "
+                "candidate-face budget)\n",
                 result.num_merged, result.num_dropped);
   if (!result.ok())
     throw paco::Error("assembly failed (" + paco::toString(result.status) + "): " + result.message);

@@ -36,6 +36,7 @@ struct Options {
   std::size_t limit = 0, samples = 10000, qem_faces = 40;
   unsigned jobs = 1;
   double time_limit = 60.0;
+  std::size_t max_candidate_faces = paco::evaluation::MethodOptions().max_candidate_faces;
   bool dataset_labels = false;
   bool quiet = false;
   std::string model, completion_frame = "own", observed_fusion = "on";
@@ -152,6 +153,7 @@ int dataset(const Options& o) {
   b.output_dir = o.output_dir;
   b.progress = !o.quiet;
   b.method.time_limit = o.time_limit;
+  b.method.max_candidate_faces = o.max_candidate_faces;
   b.method.segmenter = o.segmenter;
   b.method.use_dataset_labels = o.dataset_labels;
   b.method.qem_target_faces = o.qem_faces;
@@ -195,6 +197,8 @@ int run(int argc, char** argv) {
       ("jobs,j", po::value(&o.jobs)->default_value(o.jobs), "samples evaluated in parallel")
       ("output,o", po::value(&o.output_dir), "dataset mode: output folder (eval.csv, results.md)")
       ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "seconds per assembly; past it the case fails as time-limit")
+      ("max-candidate-faces", po::value(&o.max_candidate_faces)->default_value(o.max_candidate_faces),
+       "polyfit: leave out the least confident predicted primitives until the candidate faces fit (0: no limit)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct and box-prior")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("qem-faces", po::value(&o.qem_faces)->default_value(o.qem_faces), "poisson-qem: triangles after simplification")

@@ -42,6 +42,7 @@ struct Options {
   std::string assembler = "polyfit";
   std::string solver = "cbc";
   double time_limit = 60.0;
+  std::size_t max_candidate_faces = paco::PolygonalAssembler::kDefaultMaxCandidateFaces;
   bool drop_non_finite = false;
   int threads = 0;
 };
@@ -81,6 +82,8 @@ int run(int argc, char** argv) {
       ("assembler", po::value(&o.assembler)->default_value(o.assembler), "polyfit or cell-complex")
       ("solver", po::value(&o.solver)->default_value(o.solver), "MIP solver of polyfit: cbc or glpk")
       ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "assembly time budget in seconds")
+      ("max-candidate-faces", po::value(&o.max_candidate_faces)->default_value(o.max_candidate_faces),
+       "polyfit: leave out the least confident unseen primitives until the candidate faces fit (0: no limit)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
   po::options_description all;
@@ -104,6 +107,7 @@ int run(int argc, char** argv) {
   assembler.setBackend(o.assembler);
   assembler.setMipSolver(o.solver);
   assembler.setTimeLimit(o.time_limit);
+  assembler.setMaxCandidateFaces(o.max_candidate_faces);
   paco::CompletionModel::ConstPtr model;
   paco::app::StageTimer timer;
   if (!o.no_completion) {

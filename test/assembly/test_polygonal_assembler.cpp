@@ -280,6 +280,53 @@ TEST(Preprocessing, MergesNearDuplicatePlanesAndDropsWeakPrimitives) {
   EXPECT_EQ(countPlanarRegions(mesh), 6u);
 }
 
+TEST(PolyFit, CandidateFaceBudgetLeavesOutTheLeastConfidentPrimitives) {
+  // An observed box (confidence 1) and eight predicted patches through it, confidence rising
+  // from 0.55 to 0.9.
+  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
+  const std::size_t box_planes = primitives.size();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d n = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
+    const Eigen::Vector3d centre(0.5 + 0.3 * unit(rng), 0.4 + 0.2 * unit(rng), 0.3 + 0.15 * unit(rng));
+    const Eigen::Vector3d u = n.unitOrthogonal();
+    PlanarPrimitive patch = squarePatch(centre, u, n.cross(u), 0.2);
+    patch.confidence = 0.55f + 0.05f * static_cast<float>(k);
+    primitives.push_back(patch);
+  }
+  auto assemble = [&](std::size_t budget, SurfaceMesh& mesh) {
+    paco::PolygonalAssembler assembler;
+    assembler.setMaxCandidateFaces(budget);
+    assembler.setTimeLimit(60);
+    assembler.setInputPrimitives(primitives);
+    return assembler.reconstruct(mesh);
+  };
+  SurfaceMesh unlimited_mesh;
+  const std::size_t unlimited = assemble(0, unlimited_mesh).num_candidate_faces;
+  ASSERT_GT(unlimited, 0u);
+
+  const std::size_t budget = unlimited / 3;
+  SurfaceMesh mesh;
+  const paco::AssemblyResult result = assemble(budget, mesh);
+  ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+  EXPECT_LE(result.num_candidate_faces, budget);
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  // The dropped primitives are exactly the least confident patches; the box is whole.
+  std::size_t dropped = 0;
+  for (std::size_t k = 0; k < primitives.size(); ++k) dropped += result.fates[k].kind == paco::PrimitiveFate::Dropped;
+  ASSERT_GE(dropped, 1u);
+  EXPECT_EQ(result.num_dropped, dropped);
+  EXPECT_EQ(result.num_planes_used, primitives.size() - dropped);
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    const bool expect_dropped = k >= box_planes && k - box_planes < dropped;
+    EXPECT_EQ(result.fates[k].kind == paco::PrimitiveFate::Dropped, expect_dropped) << "primitive " << k;
+    if (expect_dropped) {
+      EXPECT_NE(result.fates[k].reason.find("candidate faces"), std::string::npos);
+    }
+  }
+}
+
 // --- failures --------------------------------------------------------------------------------
 
 class AssemblyFailures : public ::testing::TestWithParam<std::string> {

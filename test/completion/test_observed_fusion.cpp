@@ -56,7 +56,7 @@ TEST(ObservedFusion, APredictedPlaneTakesTheObservedPlaneAndPoints) {
   // 64 predicted points moved onto it, plus the 100 observed ones.
   EXPECT_EQ(fused[0].points.size(), 164u);
   EXPECT_LT(maxDistanceToPlane(fused[0], fused[0].plane), 1e-6);
-  EXPECT_FLOAT_EQ(fused[0].confidence, 0.9f);
+  EXPECT_FLOAT_EQ(fused[0].confidence, 1.0f);  // a seen face, no longer a guess
 }
 
 TEST(ObservedFusion, UnseenPredictionsStayAndUnmatchedObservationsAreAdded) {

@@ -17,6 +17,9 @@ struct BackendOutcome {
   double seconds_partition = 0.0, seconds_solve = 0.0;
   std::size_t num_candidate_faces = 0, num_cells = 0, num_variables = 0, num_constraints = 0;
   int crossings_resolved = 0;  ///< cell-complex: cells relabelled to remove non-manifold "X" edges
+  /// polyfit: primitives left out to keep the candidate faces within the budget (indices into
+  /// the backend's input, least confident first).
+  std::vector<std::size_t> dropped_for_budget;
 };
 
 struct PolyFitOptions {
@@ -24,6 +27,9 @@ struct PolyFitOptions {
   double wt_fitting = 0.43, wt_coverage = 0.27, wt_complexity = 0.30;
   double seconds = 60.0;  ///< budget for the whole backend call
   bool verbose = false;
+  /// When the candidate faces exceed this (0: no limit), the least confident primitives with
+  /// confidence < 1 are left out until they fit: the MIP grows much faster than the planes.
+  std::size_t max_candidate_faces = 0;
 };
 
 BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const PolyFitOptions& options,

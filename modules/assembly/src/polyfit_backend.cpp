@@ -13,7 +13,9 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <chrono>
+#include <memory>
 #include <tuple>
 #include <vector>
 
@@ -54,20 +56,70 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   mesh = SurfaceMesh{};
   const Eigen::Matrix3d rotation = genericRotation();
 
-  std::vector<PointWithNormalAndPlane> points;
-  for (std::size_t k = 0; k < primitives.size(); ++k) {
-    for (const auto& p : primitives[k].points) {
-      const Eigen::Vector3d x = rotation * Eigen::Vector3d(p.x, p.y, p.z);
-      const Eigen::Vector3d n = rotation * Eigen::Vector3d(p.normal_x, p.normal_y, p.normal_z);
-      points.emplace_back(Point(x.x(), x.y(), x.z()), Vector(n.x(), n.y(), n.z()), static_cast<int>(k));
+  // Candidate generation for the primitives marked in `keep` (plane indices renumbered 0..n-1).
+  auto generate = [&](const std::vector<bool>& keep) {
+    std::vector<PointWithNormalAndPlane> points;
+    int plane = 0;
+    for (std::size_t k = 0; k < primitives.size(); ++k) {
+      if (!keep[k]) continue;
+      for (const auto& p : primitives[k].points) {
+        const Eigen::Vector3d x = rotation * Eigen::Vector3d(p.x, p.y, p.z);
+        const Eigen::Vector3d n = rotation * Eigen::Vector3d(p.normal_x, p.normal_y, p.normal_z);
+        points.emplace_back(Point(x.x(), x.y(), x.z()), Vector(n.x(), n.y(), n.z()), plane);
+      }
+      ++plane;
+    }
+    // The constructor generates the candidate faces and their confidences (not interruptible).
+    return std::make_unique<Reconstruction>(points, PointMap(), NormalMap(), PlaneIndexMap());
+  };
+  auto countCandidates = [](const Reconstruction& r) {
+    CgalMesh candidates;
+    r.output_candidate_faces(candidates);
+    return static_cast<std::size_t>(candidates.number_of_faces());
+  };
+
+  std::vector<bool> keep(primitives.size(), true);
+  std::unique_ptr<Reconstruction> reconstruction = generate(keep);
+  if (reconstruction->error_message().empty() && options.max_candidate_faces > 0 &&
+      countCandidates(*reconstruction) > options.max_candidate_faces) {
+    // Leave out the k least confident predicted primitives (observed ones have confidence 1),
+    // with the smallest k that fits the budget, found by bisection (fewer planes give fewer
+    // candidates, if not strictly). At least 4 planes stay.
+    std::vector<std::size_t> droppable;
+    for (std::size_t k = 0; k < primitives.size(); ++k)
+      if (primitives[k].confidence < 1.0f) droppable.push_back(k);
+    std::stable_sort(droppable.begin(), droppable.end(), [&](std::size_t a, std::size_t b) {
+      return primitives[a].confidence < primitives[b].confidence;
+    });
+    const std::size_t most = std::min(droppable.size(), primitives.size() > 4 ? primitives.size() - 4 : 0);
+    auto keepAllBut = [&](std::size_t k) {
+      std::vector<bool> mask(primitives.size(), true);
+      for (std::size_t i = 0; i < k; ++i) mask[droppable[i]] = false;
+      return mask;
+    };
+    std::size_t lo = 1, hi = most;  // the answer is in [lo, hi]; hi fits or is the most we may drop
+    std::unique_ptr<Reconstruction> best;
+    if (most > 0) {
+      best = generate(keepAllBut(most));
+      while (lo < hi && secondsSince(start) < 0.25 * options.seconds) {
+        const std::size_t mid = (lo + hi) / 2;
+        std::unique_ptr<Reconstruction> trial = generate(keepAllBut(mid));
+        if (trial->error_message().empty() && countCandidates(*trial) <= options.max_candidate_faces) {
+          hi = mid;
+          best = std::move(trial);
+        } else {
+          lo = mid + 1;
+        }
+      }
+      if (best && best->error_message().empty()) {
+        reconstruction = std::move(best);
+        outcome.dropped_for_budget.assign(droppable.begin(), droppable.begin() + static_cast<std::ptrdiff_t>(hi));
+      }
     }
   }
-
-  // The constructor generates the candidate faces and their confidences (not interruptible).
-  Reconstruction reconstruction(points, PointMap(), NormalMap(), PlaneIndexMap());
-  if (!reconstruction.error_message().empty()) {
+  if (!reconstruction->error_message().empty()) {
     outcome.status = AssemblyStatus::SolverFailed;
-    outcome.message = "PolyFit candidate generation failed: " + reconstruction.error_message();
+    outcome.message = "PolyFit candidate generation failed: " + reconstruction->error_message();
     return outcome;
   }
   outcome.seconds_partition = secondsSince(start);
@@ -90,10 +142,10 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   CgalMesh result;
   bool solved = false;
   if (options.solver == MipSolver::Cbc)
-    solved = reconstruction.reconstruct<Cbc_mixed_integer_program_traits<double>>(
+    solved = reconstruction->reconstruct<Cbc_mixed_integer_program_traits<double>>(
         result, options.wt_fitting, options.wt_coverage, options.wt_complexity);
   else
-    solved = reconstruction.reconstruct<Glpk_timed_mixed_integer_program_traits<double>>(
+    solved = reconstruction->reconstruct<Glpk_timed_mixed_integer_program_traits<double>>(
         result, options.wt_fitting, options.wt_coverage, options.wt_complexity);
   outcome.seconds_solve = secondsSince(start) - outcome.seconds_partition;
   const MipOutcome& mip = mipOutcome();
@@ -103,13 +155,13 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   outcome.num_constraints = mip.num_constraints;
   {
     CgalMesh candidates;
-    reconstruction.output_candidate_faces(candidates);
+    reconstruction->output_candidate_faces(candidates);
     outcome.num_candidate_faces = candidates.number_of_faces();
   }
   if (!solved) {
     const bool timed_out = mip.hit_time_limit && !mip.has_solution;
     outcome.status = timed_out ? AssemblyStatus::TimeLimit : AssemblyStatus::SolverFailed;
-    outcome.message = !mip.message.empty() ? mip.message : "PolyFit failed: " + reconstruction.error_message();
+    outcome.message = !mip.message.empty() ? mip.message : "PolyFit failed: " + reconstruction->error_message();
     return outcome;
   }
 

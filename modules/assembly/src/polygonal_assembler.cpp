@@ -302,7 +302,41 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     options.wt_complexity = wt_complexity_;
     options.seconds = secondsLeft();
     options.verbose = verbose_;
+    options.max_candidate_faces = max_candidate_faces_;
     outcome = detail::runPolyFit(primitives, options, mesh);
+    if (!outcome.dropped_for_budget.empty()) {
+      // used_[j] is the j-th primitive kept by pre-processing, in input order.
+      std::vector<std::size_t> input_index;
+      for (std::size_t i = 0; i < result_.fates.size(); ++i)
+        if (result_.fates[i].kind == PrimitiveFate::Kept) input_index.push_back(i);
+      std::vector<bool> dropped(used_.size(), false);
+      for (std::size_t j : outcome.dropped_for_budget) {
+        dropped[j] = true;
+        PrimitiveFate& fate = result_.fates[input_index[j]];
+        fate.kind = PrimitiveFate::Dropped;
+        std::ostringstream why;
+        why << "confidence " << used_[j].confidence << ", among the least confident left out to keep PolyFit within "
+            << max_candidate_faces_ << " candidate faces";
+        fate.reason = why.str();
+        // Primitives merged into it go with it.
+        for (auto& other : result_.fates)
+          if (other.kind == PrimitiveFate::MergedInto && other.target == input_index[j]) {
+            other.kind = PrimitiveFate::Dropped;
+            other.reason = "merged into a primitive left out for the candidate-face budget";
+          }
+      }
+      std::vector<PlanarPrimitive> kept;
+      for (std::size_t j = 0; j < used_.size(); ++j)
+        if (!dropped[j]) kept.push_back(std::move(used_[j]));
+      used_ = std::move(kept);
+      result_.num_planes_used = used_.size();
+      result_.num_dropped = 0;
+      result_.num_merged = 0;
+      for (const auto& fate : result_.fates) {
+        result_.num_merged += fate.kind == PrimitiveFate::MergedInto;
+        result_.num_dropped += fate.kind == PrimitiveFate::Dropped;
+      }
+    }
   } else {
     // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
     // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x); as a

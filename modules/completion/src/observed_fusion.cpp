@@ -101,6 +101,9 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       // Keep the predicted orientation (outward), take the observed position and tilt.
       target.plane = seen.plane.normal.dot(target.plane.normal) < 0.0 ? seen.plane.flipped() : seen.plane;
       projectOnto(target.plane, target.points);
+      // A seen face is certain, whatever the network's score: confidence 1, like the unmatched
+      // observed segments (the assembler's candidate-face budget never drops those).
+      target.confidence = 1.0f;
       snapped[best] = true;
       ++counts.snapped;
     } else {

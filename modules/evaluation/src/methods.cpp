@@ -127,6 +127,7 @@ std::map<std::string, Entry>& registry() {
   PolygonalAssembler assembler;
   assembler.setBackend(options.assembler);
   assembler.setTimeLimit(options.time_limit);
+  assembler.setMaxCandidateFaces(options.max_candidate_faces);
   assembler.setInputPrimitives(primitives);
   SurfaceMesh mesh;
   const auto start = std::chrono::steady_clock::now();

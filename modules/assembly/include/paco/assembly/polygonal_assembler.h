@@ -123,6 +123,15 @@ class PolygonalAssembler {
   void setTimeLimit(double seconds);
   double getTimeLimit() const { return time_limit_; }
 
+  /// PolyFit: when the candidate faces exceed this many, the least confident primitives with
+  /// confidence < 1 (predicted, not observed) are left out until they fit; they are reported as
+  /// Dropped in getResult().fates. The binary program grows much faster than the number of planes:
+  /// CBC solves ~800 candidate faces in a fraction of a second, ~1,300 in seconds and often finds
+  /// no solution at all for ~2,000 within a minute. 0: no limit. Default 1000.
+  static constexpr std::size_t kDefaultMaxCandidateFaces = 1000;
+  void setMaxCandidateFaces(std::size_t faces) { max_candidate_faces_ = faces; }
+  std::size_t getMaxCandidateFaces() const { return max_candidate_faces_; }
+
   /// Print the MIP solver's own log to stdout (default false: silent).
   void setVerbose(bool verbose) { verbose_ = verbose; }
 
@@ -179,6 +188,7 @@ class PolygonalAssembler {
   MipSolver solver_ = MipSolver::Cbc;
   double wt_fitting_ = 0.43, wt_coverage_ = 0.27, wt_complexity_ = 0.30;
   double time_limit_ = 60.0;
+  std::size_t max_candidate_faces_ = kDefaultMaxCandidateFaces;
   bool verbose_ = false;
   double merge_angle_;
   double merge_distance_ = 0.005;

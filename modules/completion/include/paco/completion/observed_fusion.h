@@ -42,10 +42,10 @@ std::string describe(const ObservedFusionReport& report);
 /// same frame). Observed segments are taken largest first. Each is matched to the completed
 /// primitive whose plane is nearest to its points within the tolerances; the first match
 /// replaces that primitive's plane by the observed one (keeping the predicted orientation),
-/// projects its predicted points onto it and adds the observed points; later matches to the
-/// same primitive add their points. Other completed primitives within the tolerances of the same
-/// observed segment are duplicates: their points are projected onto the chosen one and they are
-/// removed. Unmatched observed segments are appended with confidence 1; unmatched completed
+/// projects its predicted points onto it, adds the observed points and sets its confidence to 1
+/// (the face was seen); later matches to the same primitive add their points. Other completed
+/// primitives within the tolerances of the same observed segment are duplicates: their points
+/// are projected onto the chosen one and they are removed. Unmatched observed segments are appended with confidence 1; unmatched completed
 /// primitives are kept unchanged. Throws InvalidInputError on tolerances
 /// that are negative or not finite.
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,

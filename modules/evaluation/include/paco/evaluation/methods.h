@@ -34,6 +34,9 @@ struct MethodOptions {
   std::string assembler = "polyfit";
   /// Time budget of one assembly or reconstruction, in seconds (> 0; default 60).
   double time_limit = 60.0;
+  /// PolyFit candidate-face budget (PolygonalAssembler::setMaxCandidateFaces, whose default this
+  /// is; 0: none).
+  std::size_t max_candidate_faces = 1000;
   /// Planar segmenter backend for the visible points of `direct` and `box-prior` (default "gocopp").
   std::string segmenter = "gocopp";
   /// Use the dataset's labels of the input points instead of running the segmenter (default
