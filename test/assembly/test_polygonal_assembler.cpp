@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -454,6 +455,51 @@ TEST(Assembler, SolidsTouchingAlongAnEdgeAreSeparated) {
   EXPECT_EQ(topology.components, 2u);
   EXPECT_EQ(mesh.faces.size(), 12u);
   EXPECT_EQ(mesh.vertices.size(), 16u);  // 14 distinct positions, the shared edge's 2 doubled
+}
+
+// A tetrahedron and three small tetrahedral spikes touching it only at the three corners of its
+// top triangle: every corner of that triangle is a non-manifold vertex. (A PolyFit result on an
+// MFCAD part had such a triangle; splitting one corner renamed it in the triangle before the next
+// corner was grouped, and the clean-up tore the closed mesh open.)
+class CornerTouchingSpikesAssembler : public paco::PolygonalAssembler {
+ protected:
+  static void addTetrahedron(SurfaceMesh& mesh, const std::array<Eigen::Vector3d, 4>& corners) {
+    const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), corners.begin(), corners.end());
+    const std::uint32_t faces[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};  // face + opposite
+    for (const auto& f : faces) {
+      const Eigen::Vector3d& a = corners[f[0]];
+      const Eigen::Vector3d n = (corners[f[1]] - a).cross(corners[f[2]] - a);
+      const bool outward = n.dot(a - corners[f[3]]) > 0.0;
+      mesh.faces.push_back(outward ? std::vector<std::uint32_t>{base + f[0], base + f[1], base + f[2]}
+                                   : std::vector<std::uint32_t>{base + f[0], base + f[2], base + f[1]});
+    }
+  }
+  void performReconstruction(const std::vector<PlanarPrimitive>&, SurfaceMesh& mesh) override {
+    mesh = SurfaceMesh{};
+    const Eigen::Vector3d u(0, 0, 0), v(0.2, 0, 0), w(0, 0.2, 0);
+    const Eigen::Vector3d centre = (u + v + w) / 3.0;
+    for (const Eigen::Vector3d& c : {u, v, w}) {  // the spikes first, so that their faces come first
+      const Eigen::Vector3d out = (c - centre).normalized();
+      const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(out);
+      addTetrahedron(mesh, {c, c + 0.05 * (out + 0.5 * side) + Eigen::Vector3d(0, 0, 0.02),
+                            c + 0.05 * (out - 0.5 * side) + Eigen::Vector3d(0, 0, 0.02),
+                            c + 0.05 * out + Eigen::Vector3d(0, 0, 0.06)});
+    }
+    addTetrahedron(mesh, {u, v, w, Eigen::Vector3d(0.06, 0.06, -0.2)});
+  }
+};
+
+TEST(Assembler, SolidsTouchingAtTheCornersOfOneTriangleAreSeparated) {
+  CornerTouchingSpikesAssembler assembler;
+  assembler.setInputPrimitives(primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1})));
+  SurfaceMesh mesh;
+  ASSERT_TRUE(assembler.reconstruct(mesh).ok()) << assembler.getResult().message;
+  const paco::MeshTopology topology = paco::analyseTopology(mesh);
+  EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
+  EXPECT_EQ(topology.components, 4u);
+  EXPECT_EQ(mesh.faces.size(), 16u);
+  EXPECT_EQ(mesh.vertices.size(), 16u);  // 13 distinct positions, the triangle's 3 corners doubled
 }
 
 }  // namespace

@@ -419,13 +419,15 @@ std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> defectiveEdges(const Su
 // What the X-pattern search cannot see (more than four cells around an edge, cells reaching an
 // edge over part of its length): flips, one at a time, a cell along a defective edge of the
 // extracted surface, the one raising the min-cut energy least among those that reduce the
-// defects, until the surface is a closed manifold or no flip helps. Returns the flips.
+// defects, until the surface is a closed manifold, no flip helps or `out_of_time()`. Returns the
+// flips.
 int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjacency>& adjacencies, int num_primitives,
-                        const std::function<double(int)>& flip_cost, std::vector<bool>& inside) {
+                        const std::function<double(int)>& flip_cost, const std::function<bool()>& out_of_time,
+                        std::vector<bool>& inside) {
   int flips = 0;
   SurfaceMesh mesh = extractBoundary(cells, adjacencies, inside, num_primitives);
   std::size_t defects = defectsAfterFinishing(mesh);
-  for (int round = 0; defects > 0 && round < 32; ++round) {
+  for (int round = 0; defects > 0 && round < 32 && !out_of_time(); ++round) {
     std::vector<int> candidates;
     for (const auto& [from, to] : defectiveEdges(mesh)) {
       if ((to - from).norm() < 1e-12) continue;
@@ -441,6 +443,7 @@ int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjace
     std::sort(by_cost.begin(), by_cost.end());
     bool improved = false;
     for (const auto& [cost, c] : by_cost) {
+      if (out_of_time()) break;
       inside[c] = !inside[c];
       SurfaceMesh attempt = extractBoundary(cells, adjacencies, inside, num_primitives);
       const std::size_t attempt_defects = defectsAfterFinishing(attempt);
@@ -699,7 +702,8 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
       return delta;
     };
     outcome.crossings_resolved = resolveEdgeCrossings(cells, neighbours, flip_cost, inside);
-    outcome.crossings_resolved += repairByRelabelling(cells, adjacencies, num_primitives, flip_cost, inside);
+    outcome.crossings_resolved += repairByRelabelling(cells, adjacencies, num_primitives, flip_cost,
+                                                     [&] { return secondsSince(start) > options.seconds; }, inside);
     num_inside = static_cast<int>(std::count(inside.begin(), inside.end(), true));
   }
   if (num_inside == 0) {

@@ -174,6 +174,13 @@ void splitNonManifold(SurfaceMesh& mesh) {
   std::vector<std::vector<std::uint32_t>> faces_of(mesh.vertices.size());
   for (std::uint32_t f = 0; f < mesh.faces.size(); ++f)
     for (std::uint32_t v : mesh.faces[f]) faces_of[v].push_back(f);
+  // Grouping reads the edges with the original vertex indices (the keys of `partner`), so the
+  // copies are applied only once every vertex is grouped: renaming as we went broke the lookups
+  // at the next split vertex on the same face and tore a closed mesh open.
+  struct Rename {
+    std::uint32_t face, from, to;
+  };
+  std::vector<Rename> renames;
   const std::size_t num_vertices = mesh.vertices.size();
   for (std::uint32_t v = 0; v < num_vertices; ++v) {
     const auto& fs = faces_of[v];
@@ -205,11 +212,12 @@ void splitNonManifold(SurfaceMesh& mesh) {
       }
       const auto copy = static_cast<std::uint32_t>(mesh.vertices.size());
       mesh.vertices.push_back(mesh.vertices[v]);
-      for (std::uint32_t f : members)
-        for (auto& index : mesh.faces[f])
-          if (index == v) index = copy;
+      for (std::uint32_t f : members) renames.push_back({f, v, copy});
     }
   }
+  for (const Rename& r : renames)
+    for (auto& index : mesh.faces[r.face])
+      if (index == r.from) index = r.to;
 }
 
 }  // namespace
