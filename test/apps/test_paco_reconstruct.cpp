@@ -109,6 +109,23 @@ TEST(PacoReconstruct, FusionKeepsTheSeenFacesWhenTheNetworkKeepsNothing) {
   EXPECT_NE(log.find("assembly"), std::string::npos) << log;
   EXPECT_EQ(filesIn(out_dir), 0u);
 }
+
+// With a tiny candidate-face budget PolyFit must leave out the predicted primitives (the untrained
+// model's, confidence < 1) and keep the seen faces, and the tool must say so.
+TEST(PacoReconstruct, ReportsPrimitivesLeftOutForTheCandidateFaceBudget) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " --model " + quoted(dir.file("tiny.pt")) +
+                                       " --threshold 0 --max-candidate-faces 10 -o " + quoted(dir.file("part.obj")),
+                                   &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("least confident left out for --max-candidate-faces 10"), std::string::npos) << log;
+  EXPECT_EQ(log.find(" 0 least confident left out"), std::string::npos) << log;
+  EXPECT_TRUE(paco::analyseTopology(paco::io::loadMesh(dir.file("part.obj"))).isClosedManifold());
+}
 #endif
 
 TEST(PacoReconstruct, TruncatedInputFailsWithoutOutputs) {
