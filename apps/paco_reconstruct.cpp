@@ -180,13 +180,10 @@ int run(int argc, char** argv) {
               mesh.vertices.size(), result.topology.describe().c_str());
   if (result.num_merged || result.num_dropped) {
     // Say why primitives were not used, so that a surprising mesh can be traced to its cause.
-    std::size_t over_budget = 0;
-    for (const auto& fate : result.fates)
-      over_budget += fate.kind == paco::PrimitiveFate::Dropped && fate.reason.find("candidate faces") != std::string::npos;
     std::printf("  %zu of %zu primitives used: %zu merged as near-duplicates, %zu with too few points dropped, "
                 "%zu least confident left out for --max-candidate-faces %zu\n",
-                result.num_planes_used, result.num_input_planes, result.num_merged, result.num_dropped - over_budget,
-                over_budget, o.max_candidate_faces);
+                result.num_planes_used, result.num_input_planes, result.num_merged, result.num_dropped - result.num_over_budget,
+                result.num_over_budget, o.max_candidate_faces);
   }
 
   // Outputs appear only together and only when complete.

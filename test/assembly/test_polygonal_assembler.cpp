@@ -318,6 +318,7 @@ TEST(PolyFit, CandidateFaceBudgetLeavesOutTheLeastConfidentPrimitives) {
   for (std::size_t k = 0; k < primitives.size(); ++k) dropped += result.fates[k].kind == paco::PrimitiveFate::Dropped;
   ASSERT_GE(dropped, 1u);
   EXPECT_EQ(result.num_dropped, dropped);
+  EXPECT_EQ(result.num_over_budget, dropped);
   EXPECT_EQ(result.num_planes_used, primitives.size() - dropped);
   for (std::size_t k = 0; k < primitives.size(); ++k) {
     const bool expect_dropped = k >= box_planes && k - box_planes < dropped;

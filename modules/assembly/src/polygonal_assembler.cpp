@@ -318,11 +318,13 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
         why << "confidence " << used_[j].confidence << ", among the least confident left out to keep PolyFit within "
             << max_candidate_faces_ << " candidate faces";
         fate.reason = why.str();
+        ++result_.num_over_budget;
         // Primitives merged into it go with it.
         for (auto& other : result_.fates)
           if (other.kind == PrimitiveFate::MergedInto && other.target == input_index[j]) {
             other.kind = PrimitiveFate::Dropped;
             other.reason = "merged into a primitive left out for the candidate-face budget";
+            ++result_.num_over_budget;
           }
       }
       std::vector<PlanarPrimitive> kept;

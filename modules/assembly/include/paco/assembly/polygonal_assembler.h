@@ -66,6 +66,7 @@ struct AssemblyResult {
   std::size_t num_input_planes = 0;
   std::size_t num_planes_used = 0;     ///< after merging near-duplicates and dropping weak ones
   std::size_t num_merged = 0, num_dropped = 0;
+  std::size_t num_over_budget = 0;     ///< polyfit: of num_dropped, left out for the candidate-face budget (with what merged into them)
   bool solution_is_optimal = false;    ///< polyfit: the MIP was solved to optimality
   bool hit_time_limit = false;         ///< the budget ran out (the best solution found was used)
   std::size_t num_candidate_faces = 0; ///< polyfit: candidate faces; cell-complex: cell faces

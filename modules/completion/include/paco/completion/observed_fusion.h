@@ -45,9 +45,9 @@ std::string describe(const ObservedFusionReport& report);
 /// projects its predicted points onto it, adds the observed points and sets its confidence to 1
 /// (the face was seen); later matches to the same primitive add their points. Other completed
 /// primitives within the tolerances of the same observed segment are duplicates: their points
-/// are projected onto the chosen one and they are removed. Unmatched observed segments are appended with confidence 1; unmatched completed
-/// primitives are kept unchanged. Throws InvalidInputError on tolerances
-/// that are negative or not finite.
+/// are projected onto the chosen one and they are removed. Unmatched observed segments are
+/// appended with confidence 1; unmatched completed primitives are kept unchanged. Throws
+/// InvalidInputError on tolerances that are negative or not finite.
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
                                               const std::vector<PlanarPrimitive>& observed,
                                               const ObservedFusionOptions& options = {},
