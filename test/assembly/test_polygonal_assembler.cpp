@@ -446,16 +446,23 @@ class EdgeTouchingCubesAssembler : public paco::PolygonalAssembler {
   }
 };
 
-TEST(Assembler, SolidsTouchingAlongAnEdgeAreSeparated) {
-  EdgeTouchingCubesAssembler assembler;
+// Runs a subclass whose backend returns touching solids; the clean-up must give a closed manifold
+// with one component per solid and the expected counts.
+template <typename TouchingSolidsAssembler>
+void expectSolidsSeparated(std::size_t components, std::size_t faces, std::size_t vertices) {
+  TouchingSolidsAssembler assembler;
   assembler.setInputPrimitives(primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1})));
   SurfaceMesh mesh;
   ASSERT_TRUE(assembler.reconstruct(mesh).ok()) << assembler.getResult().message;
   const paco::MeshTopology topology = paco::analyseTopology(mesh);
   EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
-  EXPECT_EQ(topology.components, 2u);
-  EXPECT_EQ(mesh.faces.size(), 12u);
-  EXPECT_EQ(mesh.vertices.size(), 16u);  // 14 distinct positions, the shared edge's 2 doubled
+  EXPECT_EQ(topology.components, components);
+  EXPECT_EQ(mesh.faces.size(), faces);
+  EXPECT_EQ(mesh.vertices.size(), vertices);
+}
+
+TEST(Assembler, SolidsTouchingAlongAnEdgeAreSeparated) {
+  expectSolidsSeparated<EdgeTouchingCubesAssembler>(2, 12, 16);  // 14 positions, the shared edge's 2 doubled
 }
 
 // A tetrahedron and three small tetrahedral spikes touching it only at the three corners of its
@@ -492,15 +499,7 @@ class CornerTouchingSpikesAssembler : public paco::PolygonalAssembler {
 };
 
 TEST(Assembler, SolidsTouchingAtTheCornersOfOneTriangleAreSeparated) {
-  CornerTouchingSpikesAssembler assembler;
-  assembler.setInputPrimitives(primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1})));
-  SurfaceMesh mesh;
-  ASSERT_TRUE(assembler.reconstruct(mesh).ok()) << assembler.getResult().message;
-  const paco::MeshTopology topology = paco::analyseTopology(mesh);
-  EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
-  EXPECT_EQ(topology.components, 4u);
-  EXPECT_EQ(mesh.faces.size(), 16u);
-  EXPECT_EQ(mesh.vertices.size(), 16u);  // 13 distinct positions, the triangle's 3 corners doubled
+  expectSolidsSeparated<CornerTouchingSpikesAssembler>(4, 16, 16);  // 13 positions, the 3 corners doubled
 }
 
 }  // namespace

@@ -153,11 +153,7 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   outcome.hit_time_limit = mip.hit_time_limit;
   outcome.num_variables = mip.num_variables;
   outcome.num_constraints = mip.num_constraints;
-  {
-    CgalMesh candidates;
-    reconstruction->output_candidate_faces(candidates);
-    outcome.num_candidate_faces = candidates.number_of_faces();
-  }
+  outcome.num_candidate_faces = countCandidates(*reconstruction);
   if (!solved) {
     const bool timed_out = mip.hit_time_limit && !mip.has_solution;
     outcome.status = timed_out ? AssemblyStatus::TimeLimit : AssemblyStatus::SolverFailed;

@@ -51,6 +51,15 @@ Plane refit(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& hint) 
   }
 }
 
+// num_merged and num_dropped from the fates.
+void countFates(AssemblyResult& result) {
+  result.num_merged = result.num_dropped = 0;
+  for (const auto& fate : result.fates) {
+    result.num_merged += fate.kind == PrimitiveFate::MergedInto;
+    result.num_dropped += fate.kind == PrimitiveFate::Dropped;
+  }
+}
+
 }  // namespace
 
 std::string toString(AssemblyStatus status) {
@@ -260,10 +269,7 @@ bool PolygonalAssembler::initCompute() {
 
   used_ = mergeAndFilterPrimitives(primitives, merge_angle_, merge_distance_ * diagonal, min_support_, &result_.fates);
   result_.num_planes_used = used_.size();
-  for (const auto& fate : result_.fates) {
-    result_.num_merged += fate.kind == PrimitiveFate::MergedInto;
-    result_.num_dropped += fate.kind == PrimitiveFate::Dropped;
-  }
+  countFates(result_);
   if (used_.size() < 4) {
     std::ostringstream message;
     message << "at least 4 planes are needed to enclose a volume; " << used_.size() << " left of " << input_.size();
@@ -332,12 +338,7 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
         if (!dropped[j]) kept.push_back(std::move(used_[j]));
       used_ = std::move(kept);
       result_.num_planes_used = used_.size();
-      result_.num_dropped = 0;
-      result_.num_merged = 0;
-      for (const auto& fate : result_.fates) {
-        result_.num_merged += fate.kind == PrimitiveFate::MergedInto;
-        result_.num_dropped += fate.kind == PrimitiveFate::Dropped;
-      }
+      countFates(result_);
     }
   } else {
     // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
