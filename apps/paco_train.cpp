@@ -46,6 +46,7 @@ struct Options {
   std::uint64_t seed = 1;
   std::vector<std::string> disabled_losses;
   std::string input_frame = "complete";
+  std::string input_orientation = "as-is";
   double augment_scale = 0.0, augment_offset = 0.0, augment_jitter = 0.0;
   int input_points = 2048, gt_points = 8192;
   int prefetch = 3;
@@ -118,6 +119,9 @@ int run(int argc, char** argv) {
       ("disable-loss", po::value(&o.disabled_losses)->multitoken(), "switch loss terms off (ablations)")
       ("input-frame", po::value(&o.input_frame)->default_value(o.input_frame),
        "complete: the dataset's complete-shape frame (paper); own: re-normalise each input by its own box")
+      ("input-orientation", po::value(&o.input_orientation)->default_value(o.input_orientation),
+       "as-is, or seen-planes: also turn each input so that its largest segments' planes lie on the axes "
+       "(needs --input-frame own; stored with the model, so inference does the same)")
       ("augment-scale", po::value(&o.augment_scale)->default_value(o.augment_scale),
        "random frame scale in [1-s, 1+s] for training samples (0 = off)")
       ("augment-offset", po::value(&o.augment_offset)->default_value(o.augment_offset),
@@ -149,6 +153,8 @@ int run(int argc, char** argv) {
   if (o.threads < 1) throw paco::app::UsageError("--threads must be >= 1");
   if (o.input_frame != "complete" && o.input_frame != "own")
     throw paco::app::UsageError("--input-frame must be 'complete' or 'own'");
+  if (o.input_orientation != "as-is" && o.input_orientation != "seen-planes")
+    throw paco::app::UsageError("--input-orientation must be 'as-is' or 'seen-planes'");
   if (o.augment_scale < 0.0 || o.augment_scale >= 1.0 || o.augment_offset < 0.0)
     throw paco::app::UsageError("--augment-scale must be in [0, 1) and --augment-offset >= 0");
   if (!(o.augment_jitter >= 0.0 && o.augment_jitter < 0.2))
@@ -185,11 +191,28 @@ int run(int argc, char** argv) {
   std::optional<paco::LoadedCheckpoint> initial_model;
   if (!o.init_from.empty()) initial_model = paco::loadCheckpoint(o.init_from);
 
+  // The orientation belongs to the model (inference must turn inputs the same way): a resumed
+  // run keeps its own; --init-from keeps the model's unless --input-orientation is given.
+  std::string orientation = o.input_orientation;
+  if (o.resume) {
+    orientation = paco::loadCheckpoint(last.string()).config.input_orientation;
+    if (!vm["input-orientation"].defaulted() && orientation != o.input_orientation)
+      std::printf("note: --resume keeps the run's input orientation '%s'; --input-orientation ignored\n",
+                  orientation.c_str());
+  } else if (initial_model) {
+    if (vm["input-orientation"].defaulted()) orientation = initial_model->config.input_orientation;
+    initial_model->config.input_orientation = orientation;
+  }
+  options.model.input_orientation = orientation;
+  if (orientation != "as-is" && o.input_frame != "own")
+    throw paco::app::UsageError("input orientation '" + orientation + "' needs --input-frame own");
+
   auto dataset = std::make_shared<const paco::data::Dataset>(o.dataset);
   paco::completion::CollateOptions collate;
   collate.input_points = o.input_points;
   collate.gt_points = o.gt_points;
   collate.input_frame = o.input_frame;
+  collate.input_orientation = orientation;
   paco::completion::CollateOptions train_collate = collate;
   train_collate.augment_scale = o.augment_scale;
   train_collate.augment_offset = o.augment_offset;
@@ -216,9 +239,9 @@ int run(int argc, char** argv) {
   std::int64_t parameters = 0;
   for (const auto& p : trainer.network()->parameters()) parameters += p.numel();
   std::printf("dataset '%s': %zu training, %zu validation samples\n", o.dataset.c_str(), train.size, val.size);
-  std::printf("network '%s': %.2f M parameters; batch %d, lr %g, %d threads, input frame %s\n",
+  std::printf("network '%s': %.2f M parameters; batch %d, lr %g, %d threads, input frame %s, orientation %s\n",
               trainer.options().model.name.c_str(), parameters / 1e6, trainer.options().batch_size, o.lr, o.threads,
-              o.input_frame.c_str());
+              o.input_frame.c_str(), trainer.options().model.input_orientation.c_str());
 
   paco::InterruptGuard guard;
   const auto records = trainer.fit(train, val);

@@ -4,18 +4,21 @@
 # (the dataset build and the training both resume).
 #
 #   scripts/train-model.sh WORK_DIR [--init-from MODEL.pt] [--epochs N] [--seed S] [--jitter J]
+#                          [--orientation as-is|seen-planes] [--run NAME]
 #
 # --init-from starts a new run from a model's weights (e.g. models/paco_cpu.pt, to go on training
 # the shipped model on a machine that kept nothing else); without it a new run starts from random
 # weights. When WORK_DIR/run/last.pt exists the run is resumed and --init-from is ignored.
 # --seed changes the training order and augmentation (not the data set); --jitter adds Gaussian
-# noise to the training inputs (paco_train --augment-jitter).
+# noise to the training inputs (paco_train --augment-jitter); --orientation is paco_train's
+# --input-orientation (default: the starting model's, else as-is); --run names the run folder
+# under WORK_DIR (default: run).
 # Needs the MFCAD meshes in ../shared/data/mfcad (or MFCAD_DIR) and a Release build in build/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 if [ $# -lt 1 ]; then
-  sed -n 2,13p "$0" >&2
+  sed -n 2,17p "$0" >&2
   exit 2
 fi
 work=$1
@@ -24,12 +27,16 @@ init_from=""
 epochs=100
 seed=1
 jitter=0
+orientation=""
+run_name=run
 while [ $# -gt 0 ]; do
   case "$1" in
     --init-from) init_from=$2; shift 2 ;;
     --epochs) epochs=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --jitter) jitter=$2; shift 2 ;;
+    --orientation) orientation=$2; shift 2 ;;
+    --run) run_name=$2; shift 2 ;;
     *) echo "train-model.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
@@ -66,9 +73,12 @@ echo "train-model.sh: $(ls "$subset" | wc -l) meshes in the training subset"
 build/apps/paco_dataset "$subset" "$work/data" --augment-scale 0.5,2 --augment-rotate --segment --views 4 \
   --jobs 2 --seed 1
 
-run="$work/run"
+run="$work/$run_name"
 args=("$work/data" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 --augment-offset 0.05
       --augment-jitter "$jitter" --limit-val 480 --epochs "$epochs" --threads 2 --seed "$seed" --checkpoint-every 100)
+if [ -n "$orientation" ]; then
+  args+=(--input-orientation "$orientation")
+fi
 if [ -e "$run/last.pt" ]; then
   args+=(--resume)
 elif [ -n "$init_from" ]; then

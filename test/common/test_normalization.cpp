@@ -1,5 +1,8 @@
 #include <paco/common/error.h>
 #include <paco/common/normalization.h>
+#include <paco/common/orientation.h>
+
+#include <Eigen/Geometry>
 #include <paco/common/surface_mesh.h>
 
 #include <gtest/gtest.h>
@@ -46,4 +49,105 @@ TEST(Normalization, DegenerateCloudIsRejected) {
   cloud.push_back({1, 1, 1});
   cloud.push_back({1, 1, 1});
   EXPECT_THROW(paco::Normalization::fromBoundingBox(cloud), paco::InvalidInputError);
+}
+
+namespace {
+Eigen::Matrix3d turn(double degrees, const Eigen::Vector3d& axis) {
+  return Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180.0, axis.normalized()).toRotationMatrix();
+}
+}  // namespace
+
+TEST(Normalization, TurnedFrameMovesPointsPlanesAndNormalsConsistently) {
+  const Eigen::Matrix3d R = turn(37.0, Eigen::Vector3d(1, 2, 3));
+  pcl::PointCloud<pcl::PointNormal> cloud;
+  for (const auto& x : {Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, -1, 0), Eigen::Vector3d(2, 5, 7)}) {
+    pcl::PointNormal p;
+    p.getVector3fMap() = x.cast<float>();
+    p.getNormalVector3fMap() = Eigen::Vector3f(0, 0, 1);
+    cloud.push_back(p);
+  }
+  const auto n = paco::Normalization::fromBoundingBox(cloud, R);
+  EXPECT_TRUE(n.rotation.isApprox(R));
+  auto moved = cloud;
+  n.apply(moved);
+  // Centred with unit diagonal in the turned axes.
+  Eigen::Vector3f lo = moved[0].getVector3fMap(), hi = lo;
+  for (const auto& p : moved) {
+    lo = lo.cwiseMin(p.getVector3fMap());
+    hi = hi.cwiseMax(p.getVector3fMap());
+  }
+  EXPECT_NEAR((hi - lo).norm(), 1.0, 1e-5);
+  EXPECT_LT(((hi + lo) * 0.5f).norm(), 1e-5);
+  // Normals turn with the frame and come back.
+  EXPECT_TRUE(moved[0].getNormalVector3fMap().cast<double>().isApprox(R * Eigen::Vector3d(0, 0, 1), 1e-6));
+  n.applyInverse(moved);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    EXPECT_LT((moved[i].getVector3fMap() - cloud[i].getVector3fMap()).norm(), 1e-4);
+    EXPECT_LT((moved[i].getNormalVector3fMap() - cloud[i].getNormalVector3fMap()).norm(), 1e-6);
+  }
+  // A plane through two cloud points still passes through their images, with a turned normal.
+  const paco::Plane p = paco::Plane::fromPointAndNormal(Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(1, 1, 0));
+  const paco::Plane q = n.apply(p);
+  EXPECT_TRUE(q.normal.isApprox(R * p.normal));
+  EXPECT_NEAR(q.signedDistance(n.apply(Eigen::Vector3d(1, 2, 3))), 0, 1e-12);
+  EXPECT_NEAR(q.signedDistance(n.apply(Eigen::Vector3d(0, 3, -8))), 0, 1e-12);
+  const paco::Plane back = n.applyInverse(q);
+  EXPECT_TRUE(back.normal.isApprox(p.normal));
+  EXPECT_NEAR(back.offset, p.offset, 1e-12);
+}
+
+TEST(Normalization, TurnedCompositionAndInverse) {
+  paco::Normalization a{Eigen::Vector3d(1, 0, 0), 2.0, turn(30, Eigen::Vector3d(0, 0, 1))};
+  paco::Normalization b{Eigen::Vector3d(0, 3, 0), 0.5, turn(-50, Eigen::Vector3d(1, 1, 0))};
+  const Eigen::Vector3d x(7, -2, 5);
+  EXPECT_TRUE(a.then(b).apply(x).isApprox(b.apply(a.apply(x))));
+  EXPECT_TRUE(a.inverse().apply(a.apply(x)).isApprox(x));
+  EXPECT_TRUE(a.inverse().rotation.isApprox(a.rotation.transpose()));
+}
+
+TEST(Normalization, RejectsATurnThatIsNotARotation) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back({0, 0, 0});
+  cloud.push_back({1, 1, 1});
+  EXPECT_THROW(paco::Normalization::fromBoundingBox(cloud, Eigen::Matrix3d::Identity() * 2.0), paco::InvalidInputError);
+  Eigen::Matrix3d mirror = Eigen::Matrix3d::Identity();
+  mirror(2, 2) = -1.0;
+  EXPECT_THROW(paco::Normalization::fromBoundingBox(cloud, mirror), paco::InvalidInputError);
+}
+
+TEST(Orientation, TurnsTheDominantSeenFacesOntoTheAxes) {
+  // Three faces of a box turned by R0, with noisy normals: the largest first.
+  const Eigen::Matrix3d R0 = turn(23.0, Eigen::Vector3d(0.3, -1, 0.5));
+  const std::vector<Eigen::Vector3d> normals = {R0 * Eigen::Vector3d(0, 0, 1), -(R0 * Eigen::Vector3d(1, 0.01, 0)),
+                                                R0 * Eigen::Vector3d(0, 1, 0), R0 * Eigen::Vector3d(1, 1, 1)};
+  const std::vector<double> sizes = {500, 300, 200, 100};
+  const Eigen::Matrix3d R = paco::seenPlanesRotation(normals, sizes);
+  EXPECT_NEAR(R.determinant(), 1.0, 1e-9);
+  EXPECT_TRUE((R.transpose() * R).isApprox(Eigen::Matrix3d::Identity()));
+  // The largest face lands exactly on an axis, the second within its noise (0.6 degrees).
+  const auto on_axis = [](const Eigen::Vector3d& v) { return v.normalized().cwiseAbs().maxCoeff(); };
+  EXPECT_NEAR(on_axis(R * normals[0]), 1.0, 1e-12);
+  EXPECT_GT(on_axis(R * normals[1]), std::cos(0.6 * 3.14159265358979323846 / 180.0));
+  EXPECT_GT(on_axis(R * normals[2]), std::cos(0.6 * 3.14159265358979323846 / 180.0));
+  // Of the 24 such turns, the one closest to the identity: it undoes R0 (a 23-degree turn), up
+  // to the second face's noise.
+  EXPECT_LT(Eigen::AngleAxisd(R * R0).angle(), 0.6 * 3.14159265358979323846 / 180.0);
+}
+
+TEST(Orientation, LeavesAnAxisAlignedScanAsItIs) {
+  const std::vector<Eigen::Vector3d> normals = {Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, 2), Eigen::Vector3d(1, 0, 0)};
+  EXPECT_TRUE(paco::seenPlanesRotation(normals, {10, 5, 1}).isApprox(Eigen::Matrix3d::Identity()));
+  // Nothing to go by: the identity.
+  EXPECT_TRUE(paco::seenPlanesRotation({}, {}).isApprox(Eigen::Matrix3d::Identity()));
+  EXPECT_TRUE(paco::seenPlanesRotation({Eigen::Vector3d::Zero()}, {4}).isApprox(Eigen::Matrix3d::Identity()));
+  EXPECT_THROW(paco::seenPlanesRotation(normals, {1, 2}), paco::InvalidInputError);
+}
+
+TEST(Orientation, OnePlaneIsTurnedOntoItsNearestAxis) {
+  const Eigen::Matrix3d R0 = turn(15.0, Eigen::Vector3d(1, 0, 0));
+  const Eigen::Vector3d normal = R0 * Eigen::Vector3d(0, 0, 1);
+  // Parallel planes only (a slab): the second axis comes from the coordinate axes.
+  const Eigen::Matrix3d R = paco::seenPlanesRotation({normal, -normal}, {3, 2});
+  EXPECT_TRUE((R * normal).isApprox(Eigen::Vector3d(0, 0, 1), 1e-9));
+  EXPECT_TRUE(R.isApprox(R0.transpose(), 1e-9));
 }

@@ -3,6 +3,7 @@
 #include <paco/completion/losses.h>
 #include <paco/completion/matching.h>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -290,6 +291,45 @@ TEST(Batch, CollateOwnFrameMovesInputAndTruthTogether) {
   const TrainingBatch same = collate({cubeSample()}, options, 3);
   EXPECT_NEAR(same.truth.offsets[0][1].item<double>(), 1.0, 1e-6);
   EXPECT_NEAR(same.truth.offsets[0][0].item<double>(), 0.0, 1e-6);
+}
+
+TEST(Batch, CollateSeenPlanesTurnsTheSampleOntoTheAxes) {
+  // The cube sample turned by 30 degrees about (1, 2, 0): its faces are on no axis.
+  const Eigen::Matrix3d R0 =
+      Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
+  paco::data::Sample s = cubeSample();
+  for (auto* cloud : {&s.input, &s.gt_points})
+    for (auto& p : *cloud) {
+      p.getVector3fMap() = (R0 * p.getVector3fMap().cast<double>()).cast<float>();
+      p.getNormalVector3fMap() = (R0 * p.getNormalVector3fMap().cast<double>()).cast<float>();
+    }
+  for (auto& plane : s.gt_planes) plane = paco::Plane::fromPointAndNormal(R0 * plane.foot(), R0 * plane.normal);
+  CollateOptions options;
+  options.input_points = 64;
+  options.gt_points = 150;
+  options.input_frame = "own";
+  options.input_orientation = "seen-planes";
+  const TrainingBatch batch = collate({s}, options, 3);
+  // The faces are back on the axes (the turn closest to the identity undoes R0 exactly)...
+  EXPECT_NEAR(batch.truth.normals[0][0][2].item<double>(), -1.0, 1e-5);
+  EXPECT_NEAR(batch.truth.normals[0][1][0].item<double>(), 1.0, 1e-5);
+  const auto input_normals = batch.input.normals[0];
+  EXPECT_NEAR(std::get<0>(input_normals.abs().max(-1)).min().item<double>(), 1.0, 1e-5);
+  // ...the truth still lies on its planes, and the input's box in the turned axes is the unit one.
+  const auto n = batch.truth.normals[0].index_select(0, batch.truth.labels[0]);
+  const auto r = batch.truth.offsets[0].index_select(0, batch.truth.labels[0]);
+  EXPECT_LT(((batch.truth.points[0] * n).sum(-1) - r).abs().max().item<double>(), 1e-5);
+  const auto lo = std::get<0>(batch.input.points[0].min(0)), hi = std::get<0>(batch.input.points[0].max(0));
+  EXPECT_NEAR((hi - lo).norm().item<double>(), 1.0, 1e-5);
+  EXPECT_LT(((hi + lo) * 0.5).abs().max().item<double>(), 1e-5);
+  // The same as collating the unturned sample.
+  EXPECT_TRUE(torch::allclose(batch.truth.points, collate({cubeSample()}, options, 3).truth.points, 1e-4, 1e-5));
+
+  options.input_frame = "complete";  // the paper's frame is never turned
+  EXPECT_THROW(collate({s}, options, 3), paco::InvalidInputError);
+  options.input_frame = "own";
+  options.input_orientation = "sideways";
+  EXPECT_THROW(collate({s}, options, 3), paco::InvalidInputError);
 }
 
 TEST(Batch, CollateJitterMovesTheInputOnly) {

@@ -9,6 +9,7 @@
 #include <paco/encoding/completion_model.h>
 #include <paco/encoding/plane_proxy_encoder.h>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -138,6 +139,62 @@ TEST_F(PublicApi, CompleteReturnsTheNetworkOutputInTheUsersFrame) {
           out.points[0][m][j][2].item<float>()));
       EXPECT_LT((x - want).norm(), 1e-4 * unit);
       EXPECT_LT(std::abs(primitive.plane.signedDistance(x)), 1e-4 * unit);
+    }
+  }
+}
+
+TEST_F(PublicApi, SeenPlanesModelCompletesATurnedScanAsTheUnturnedOneTurned) {
+  ModelConfig config = test::tinyModelConfig();
+  config.input_orientation = "seen-planes";
+  torch::manual_seed(2);
+  PacoNetwork net(config);
+  saveCheckpoint(dir.file("turning.pt"), net);
+  const auto turning = CompletionModel::load(dir.file("turning.pt"));
+
+  // The box turned by 30 degrees about an oblique axis through a corner, in user units.
+  const Eigen::Matrix3d R0 =
+      Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Vector3d pivot(10, -5, 3);
+  SegmentedBox turned;
+  for (auto& p : turned.cloud->points) {
+    p.getVector3fMap() = (pivot + R0 * (p.getVector3fMap().cast<double>() - pivot)).cast<float>();
+    p.getNormalVector3fMap() = (R0 * p.getNormalVector3fMap().cast<double>()).cast<float>();
+  }
+  for (auto& plane : turned.segmentation.planes)
+    plane = Plane::fromPointAndNormal(pivot + R0 * (plane.foot() - pivot), R0 * plane.normal);
+
+  const auto run = [&](const SegmentedBox& input, PlaneProxies& proxies) {
+    PlaneProxyEncoder encoder;
+    encoder.setModel(turning);
+    encoder.setInputCloud(input.cloud);
+    encoder.setSegmentation(input.segmentation);
+    encoder.encode(proxies);
+    ParametricCompleter completer;
+    completer.setModel(turning);
+    completer.setInputProxies(proxies);
+    completer.setConfidenceThreshold(0.0);
+    std::vector<PlanarPrimitive> primitives;
+    completer.complete(primitives);
+    return primitives;
+  };
+  PlaneProxies straight_proxies, turned_proxies;
+  const auto straight = run(box, straight_proxies);
+  const auto completed = run(turned, turned_proxies);
+  // The axis-aligned box is left as it is; the turned one is turned back.
+  EXPECT_TRUE(straight_proxies.normalization.rotation.isApprox(Eigen::Matrix3d::Identity()));
+  EXPECT_LT(Eigen::AngleAxisd(turned_proxies.normalization.rotation * R0).angle(), 1e-5);
+  // So the network reads the same input and the completion comes back turned with the scan.
+  ASSERT_EQ(straight_proxies.features.size(), turned_proxies.features.size());
+  for (std::size_t i = 0; i < straight_proxies.features.size(); ++i)
+    ASSERT_NEAR(straight_proxies.features[i], turned_proxies.features[i], 1e-3) << "feature " << i;
+  ASSERT_EQ(straight.size(), completed.size());
+  for (std::size_t i = 0; i < straight.size(); ++i) {
+    EXPECT_NEAR(completed[i].confidence, straight[i].confidence, 1e-4);
+    EXPECT_GT(completed[i].plane.normal.dot(R0 * straight[i].plane.normal), 1.0 - 1e-5);
+    ASSERT_EQ(completed[i].points.size(), straight[i].points.size());
+    for (std::size_t j = 0; j < straight[i].points.size(); j += 97) {
+      const Eigen::Vector3d want = pivot + R0 * (straight[i].points[j].getVector3fMap().cast<double>() - pivot);
+      EXPECT_LT((completed[i].points[j].getVector3fMap().cast<double>() - want).norm(), 1e-3);
     }
   }
 }

@@ -29,11 +29,15 @@ TEST(ModelConfig, JsonRoundTripKeepsEveryField) {
   config.mlp_ratio = 1.75;
   config.distributor = "polar";
   config.encoder_depth = 0;
+  config.input_orientation = "seen-planes";
   const ModelConfig back = ModelConfig::fromJson(config.toJson());
   EXPECT_EQ(back, config);
   EXPECT_EQ(back.edge_conv_widths, (std::vector<int>{8, 12}));
   EXPECT_DOUBLE_EQ(back.mlp_ratio, 1.75);
   EXPECT_EQ(back.distributor, "polar");
+  EXPECT_EQ(back.input_orientation, "seen-planes");
+  // Model files written before the field existed read as "as-is" (missing keys keep defaults).
+  EXPECT_EQ(ModelConfig::fromJson("{\"width\": 384}").input_orientation, "as-is");
 }
 
 TEST(ModelConfig, JsonErrorsAreReported) {
@@ -64,6 +68,9 @@ TEST(ModelConfig, ValidateNamesTheBadField) {
   c = ModelConfig::preset("cpu");
   c.distributor = "spherical";
   expectBad(c, "distributor");
+  c = ModelConfig::preset("cpu");
+  c.input_orientation = "upright";
+  expectBad(c, "input_orientation");
   c = ModelConfig::preset("cpu");
   c.edge_conv_widths = {30};  // not divisible by 4 groups
   expectBad(c, "edge_conv_widths");

@@ -1,6 +1,7 @@
 #include <paco/completion/batch.h>
 
 #include <paco/common/error.h>
+#include <paco/common/orientation.h>
 
 #include <algorithm>
 #include <numeric>
@@ -28,22 +29,53 @@ std::vector<std::int64_t> resampleIndices(std::int64_t n, std::int64_t count, st
 #if PACO_HAVE_DATA
 namespace {
 
-// x -> scale * x + shift, applied after the chosen frame.
+// x -> scale * rotation * x + shift: the chosen frame, then the augmentation.
 struct Similarity {
   double scale = 1.0;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d shift = Eigen::Vector3d::Zero();
-  Eigen::Vector3d apply(const Eigen::Vector3d& x) const { return scale * x + shift; }
+  Eigen::Vector3d apply(const Eigen::Vector3d& x) const { return scale * (rotation * x) + shift; }
 };
+
+// The rotation PlaneProxyEncoder applies at inference for input_orientation "seen-planes":
+// each input segment's plane normal (here the mean of its points' normals) weighted by its size.
+Eigen::Matrix3d seenPlanesRotationOf(const paco::data::Sample& sample) {
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<double> sizes;
+  for (std::size_t i = 0; i < sample.input.size(); ++i) {
+    const int label = sample.input_labels[i];
+    if (label < 0) continue;
+    const auto slot = static_cast<std::size_t>(label);
+    if (slot >= normals.size()) {
+      normals.resize(slot + 1, Eigen::Vector3d::Zero());
+      sizes.resize(slot + 1, 0.0);
+    }
+    const auto& q = sample.input[i];
+    const Eigen::Vector3d n(q.normal_x, q.normal_y, q.normal_z);
+    if (!n.allFinite()) continue;
+    // Orient along the segment's first normal so that flipped normals do not cancel.
+    normals[slot] += normals[slot].dot(n) < 0.0 ? -n : n;
+    sizes[slot] += 1.0;
+  }
+  return seenPlanesRotation(normals, sizes);
+}
 
 Similarity frameOf(const paco::data::Sample& sample, const CollateOptions& options, std::mt19937_64& rng) {
   Similarity frame;
+  if (options.input_orientation != "as-is" && options.input_orientation != "seen-planes")
+    throw InvalidInputError("collate: unknown input orientation '" + options.input_orientation +
+                            "'; use \"as-is\" or \"seen-planes\"");
   if (options.input_frame == "own") {
-    const Normalization own = Normalization::fromBoundingBox(sample.input);
+    if (options.input_orientation == "seen-planes") frame.rotation = seenPlanesRotationOf(sample);
+    const Normalization own = Normalization::fromBoundingBox(sample.input, frame.rotation);
     frame.scale = own.scale;
-    frame.shift = -own.scale * own.center;
+    frame.shift = -own.scale * (own.rotation * own.center);
   } else if (options.input_frame != "complete") {
     throw InvalidInputError("collate: unknown input frame '" + options.input_frame +
                             "'; use \"complete\" or \"own\"");
+  } else if (options.input_orientation != "as-is") {
+    throw InvalidInputError("collate: input orientation '" + options.input_orientation +
+                            "' needs input frame \"own\" (the complete frame is the paper's, never turned)");
   }
   if (options.augment_scale > 0.0) {
     std::uniform_real_distribution<double> s(1.0 - options.augment_scale, 1.0 + options.augment_scale);
@@ -129,9 +161,8 @@ TrainingBatch collate(const std::vector<paco::data::Sample>& samples, const Coll
       if (sigma > 0.0)
         for (int k = 0; k < 3; ++k) x[k] += sigma * jitter(jitter_rng);
       for (int k = 0; k < 3; ++k) p[b][i][k] = static_cast<float>(x[k]);
-      n[b][i][0] = q.normal_x;
-      n[b][i][1] = q.normal_y;
-      n[b][i][2] = q.normal_z;
+      const Eigen::Vector3d normal = frame.rotation * Eigen::Vector3d(q.normal_x, q.normal_y, q.normal_z);
+      for (int k = 0; k < 3; ++k) n[b][i][k] = static_cast<float>(normal[k]);
       l[b][i] = s.input_labels[static_cast<std::size_t>(input_index[i])];
     }
     const auto gt_index = resampleIndices(static_cast<std::int64_t>(s.gt_points.size()), G, rng());
@@ -144,11 +175,12 @@ TrainingBatch collate(const std::vector<paco::data::Sample>& samples, const Coll
     }
     for (std::size_t g = 0; g < s.gt_planes.size(); ++g) {
       const Plane& plane = s.gt_planes[g];
-      // The frame is a similarity with positive scale: normals keep their (outward) direction
-      // and the plane moves with its foot point; r = n·foot' for the plane n·x = r.
+      // The frame is a similarity with positive scale: normals turn with it and stay outward,
+      // and the plane moves with its foot point; r = n'·foot' for the plane n'·x = r.
       const Eigen::Vector3d foot = frame.apply(plane.foot());
-      for (int k = 0; k < 3; ++k) pn[b][static_cast<std::int64_t>(g)][k] = static_cast<float>(plane.normal[k]);
-      po[b][static_cast<std::int64_t>(g)] = static_cast<float>(plane.normal.dot(foot));
+      const Eigen::Vector3d normal = frame.rotation * plane.normal;
+      for (int k = 0; k < 3; ++k) pn[b][static_cast<std::int64_t>(g)][k] = static_cast<float>(normal[k]);
+      po[b][static_cast<std::int64_t>(g)] = static_cast<float>(normal.dot(foot));
       pm[b][static_cast<std::int64_t>(g)] = true;
     }
   }

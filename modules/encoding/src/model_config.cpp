@@ -122,6 +122,10 @@ const std::vector<Field>& fields() {
             [](ModelConfig& c, const std::string& v) {
               c.distributor = parseString("distributor", v);
             }},
+      Field{"input_orientation", [](const ModelConfig& c) { return quote(c.input_orientation); },
+            [](ModelConfig& c, const std::string& v) {
+              c.input_orientation = parseString("input_orientation", v);
+            }},
   };
   return table;
 }
@@ -192,6 +196,8 @@ void ModelConfig::validate() const {
   require(distributor_hidden >= 1, "distributor_hidden must be >= 1");
   require(distributor == "projected" || distributor == "polar",
           "distributor must be 'projected' or 'polar' (got '" + distributor + "')");
+  require(input_orientation == "as-is" || input_orientation == "seen-planes",
+          "input_orientation must be 'as-is' or 'seen-planes' (got '" + input_orientation + "')");
 }
 
 std::string ModelConfig::toJson() const {

@@ -1,5 +1,6 @@
 #include <paco/common/error.h>
 #include <paco/encoding/completion_model_impl.h>
+#include <paco/common/orientation.h>
 #include <paco/encoding/plane_proxy_encoder.h>
 
 #include <cmath>
@@ -45,10 +46,22 @@ void PlaneProxyEncoder::initCompute() {
                             std::to_string(model_->config().num_centres) + " centres");
 }
 
+Normalization PlaneProxyEncoder::ownFrame() const {
+  if (model_->config().input_orientation != "seen-planes") return Normalization::fromBoundingBox(*cloud_);
+  // The segments' planes weighted by their point counts, as paco::completion::collate does
+  // in training (there the planes come from the points' normals).
+  std::vector<double> sizes(segmentation_.planes.size(), 0.0);
+  for (int label : segmentation_.labels)
+    if (label >= 0) sizes[static_cast<std::size_t>(label)] += 1.0;
+  std::vector<Eigen::Vector3d> normals;
+  for (const auto& plane : segmentation_.planes) normals.push_back(plane.normal);
+  return Normalization::fromBoundingBox(*cloud_, seenPlanesRotation(normals, sizes));
+}
+
 void PlaneProxyEncoder::computeProxies(PlaneProxies& proxies) {
   const auto& cloud = *cloud_;
   const std::int64_t n = static_cast<std::int64_t>(cloud.size());
-  const Normalization normalization = frame_ ? *frame_ : Normalization::fromBoundingBox(cloud);
+  const Normalization normalization = frame_ ? *frame_ : ownFrame();
 
   // The network was trained on num_points_ points: a fixed random subset, or repeats.
   std::vector<std::int64_t> order(static_cast<std::size_t>(n));
@@ -70,6 +83,7 @@ void PlaneProxyEncoder::computeProxies(PlaneProxies& proxies) {
     const int label = segmentation_.labels[static_cast<std::size_t>(index)];
     Eigen::Vector3d normal(p.normal_x, p.normal_y, p.normal_z);
     if (label >= 0) normal = segmentation_.planes[static_cast<std::size_t>(label)].normal;
+    normal = normalization.applyToDirection(normal);
     if (!normal.allFinite()) normal.setZero();
     for (int a = 0; a < 3; ++a) {
       xyz[3 * i + a] = static_cast<float>(x[a]);

@@ -48,6 +48,11 @@ struct CollateOptions {
   /// (centre at the origin, unit diagonal) and move its ground truth the same way, as a user
   /// scan with no complete-shape frame will be at inference.
   std::string input_frame = "complete";
+  /// "as-is" or "seen-planes": with the own frame, also turn each sample so that its largest
+  /// input segments' planes lie on the coordinate axes (paco::seenPlanesRotation, the box taken
+  /// in the turned axes), input normals and ground truth with it; what PlaneProxyEncoder does
+  /// at inference for a model whose ModelConfig::input_orientation is "seen-planes".
+  std::string input_orientation = "as-is";
   /// Random similarity applied after the frame (0 = off): scale factor drawn uniformly in
   /// [1 - s, 1 + s] and a translation in [-t, t]³ (normalised units). Applied to input and GT.
   double augment_scale = 0.0;

@@ -43,6 +43,11 @@ struct ModelConfig {
   /// "polar" (the paper's ray formula r_ij = h / (u_ij . n), from an origin shifted to distance
   /// h = 1 from the plane, denominator clamped away from 0, then projected).
   std::string distributor = "projected";
+  /// How the input is turned before the network sees it (after centring and scaling by its own
+  /// bounding box): "as-is" (not turned) or "seen-planes" (its dominant seen faces onto the
+  /// coordinate axes, paco::seenPlanesRotation; the box is then taken in the turned axes).
+  /// Training must use the same (paco_train --input-orientation); stored with the model.
+  std::string input_orientation = "as-is";
 
   /// The named presets: "paper" (reference sizes, ~41 M parameters) and "cpu" (small, chosen by
   /// measurement for 2 CPU cores; see doc/benchmarks.md). Throws InvalidInputError otherwise.

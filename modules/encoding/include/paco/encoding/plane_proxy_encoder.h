@@ -54,7 +54,9 @@ class PlaneProxyEncoder {
   void setNumPoints(int points) { num_points_ = points; }
   int getNumPoints() const { return num_points_; }
   /// The user-to-network frame. By default (nothing set) the input's own bounding box: centre at
-  /// the origin, unit diagonal, as paco_reconstruct does for a scan. Set it to evaluate the
+  /// the origin, unit diagonal, as paco_reconstruct does for a scan; a model trained with
+  /// input_orientation "seen-planes" also turns the input so that its largest segments' planes
+  /// lie on the coordinate axes (the box is then taken in the turned axes). Set it to evaluate the
   /// paper's protocol, where the partial input is already in the complete shape's frame (pass
   /// the identity, Normalization{}). The completed primitives come back in the user's frame.
   void setFrame(const Normalization& frame) { frame_ = frame; }
@@ -69,6 +71,8 @@ class PlaneProxyEncoder {
   /// Checks the input; throws on bad input.
   virtual void initCompute();
   virtual void computeProxies(PlaneProxies& proxies);
+  /// The default frame: the input's own (turned, if the model says so) bounding box.
+  Normalization ownFrame() const;
 
   pcl::PointCloud<pcl::PointNormal>::ConstPtr cloud_;
   PlanarSegmentation segmentation_;

@@ -1,0 +1,37 @@
+#pragma once
+// Usage:
+//   std::vector<Eigen::Vector3d> normals = ...;  // one per seen planar segment
+//   std::vector<double> sizes = ...;             // its number of points
+//   Eigen::Matrix3d turn = paco::seenPlanesRotation(normals, sizes);
+//   auto frame = paco::Normalization::fromBoundingBox(cloud, turn);
+//
+// Piecewise-planar objects (CAD parts, buildings, rooms) are built around a few orthogonal
+// directions. Turning a scan so that its dominant seen faces lie on the coordinate axes gives
+// the network one orientation to learn instead of all of them, whatever the scan's frame.
+#include <Eigen/Core>
+
+#include <optional>
+#include <vector>
+
+namespace paco {
+
+/// Orthonormal axes (the columns, a proper rotation) of the dominant planes: the normal of the
+/// largest plane first, then the largest plane within `tolerance_degrees` of perpendicular to
+/// it, made exactly perpendicular, then their cross product. Normals need not be unit or
+/// consistently oriented; planes with a zero or non-finite normal or a weight <= 0 are
+/// ignored. With no plane perpendicular to the first, the second axis is the coordinate axis
+/// least aligned with the first, made perpendicular. Empty when no plane counts.
+std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector3d>& normals,
+                                                 const std::vector<double>& weights,
+                                                 double tolerance_degrees = 10.0);
+
+/// Of the 24 rotations that take the columns of `axes` (a proper rotation) onto the coordinate
+/// axes, up to order and sign, the one closest to the identity (largest trace): a scan whose
+/// dominant faces are already axis-aligned is left as it is.
+Eigen::Matrix3d rotationOntoAxesClosestToIdentity(const Eigen::Matrix3d& axes);
+
+/// rotationOntoAxesClosestToIdentity(dominantPlaneAxes(...)), or the identity when no plane
+/// counts. Throws InvalidInputError when the two lists differ in length.
+Eigen::Matrix3d seenPlanesRotation(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights);
+
+}  // namespace paco
