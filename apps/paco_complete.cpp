@@ -176,7 +176,7 @@ int run(int argc, char** argv) {
   std::vector<paco::PlanarPrimitive> primitives;
   completer.complete(primitives);
   timer.stop();
-  std::printf("complete: %zu primitives with confidence > %.2f\n", primitives.size(), o.threshold);
+  paco::app::reportCompletion(primitives.size(), o.threshold, proxies.normalization);
   if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",

@@ -163,7 +163,7 @@ int run(int argc, char** argv) {
     completer.setInputProxies(proxies);
     completer.complete(primitives);
     timer.stop();
-    std::printf("complete: %zu primitives with confidence > %.2f\n", primitives.size(), o.threshold);
+    paco::app::reportCompletion(primitives.size(), o.threshold, proxies.normalization);
     if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

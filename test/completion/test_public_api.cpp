@@ -325,6 +325,25 @@ TEST(PacoCompleteTool, WritesPrimitivesAndFailsCleanly) {
   EXPECT_TRUE(std::filesystem::exists(dir.file("out.vg"))) << output;
   EXPECT_TRUE(std::filesystem::exists(dir.file("out.pcd"))) << output;
   EXPECT_NE(output.find("complete: 6 primitives"), std::string::npos) << output;  // M = 6
+  EXPECT_EQ(output.find("turned by"), std::string::npos) << output;  // an "as-is" model
+  // A "seen-planes" model turns a box turned by 20 degrees about z back onto the axes, and says so.
+  ModelConfig turning = test::tinyModelConfig();
+  turning.input_orientation = "seen-planes";
+  PacoNetwork turning_net(turning);
+  saveCheckpoint(dir.file("turning.pt"), turning_net);
+  const Eigen::Matrix3d R0 = Eigen::AngleAxisd(20.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  std::string turned_xyz;
+  for (const auto& p : box.cloud->points) {
+    const Eigen::Vector3d x = R0 * p.getVector3fMap().cast<double>();
+    turned_xyz += std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+  }
+  test::writeBytes(dir.file("turned.xyz"), turned_xyz);
+  EXPECT_EQ(test::runCommand(tool + " " + dir.file("turned.xyz") + " --segmenter region-growing --threads 1 -o " +
+                                 dir.file("turned.vg") + " --threshold 0 --model " + dir.file("turning.pt"),
+                             &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("turned by 20.0 deg"), std::string::npos) << output;
   // A corrupt model: a clear error, a non-zero exit and no output file.
   test::writeBytes(dir.file("bad.pt"), "garbage");
   EXPECT_NE(test::runCommand(common + " -o " + dir.file("bad.vg") + " --model " + dir.file("bad.pt"), &output), 0);
