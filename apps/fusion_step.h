@@ -25,10 +25,12 @@ inline void reportCompletion(std::size_t primitives, double threshold, const Nor
 
 /// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`.
 inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
-                              const PlanarSegmentation& segmentation, StageTimer& timer) {
+                              const PlanarSegmentation& segmentation, double align_unseen_degrees, StageTimer& timer) {
   timer.start("fuse");
   ObservedFusionReport report;
-  primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), {}, &report);
+  ObservedFusionOptions options;
+  options.align_unseen_degrees = align_unseen_degrees;
+  primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), options, &report);
   timer.stop();
   std::printf("fuse with the seen faces: %s\n", describe(report).c_str());
 }

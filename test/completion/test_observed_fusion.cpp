@@ -145,5 +145,41 @@ TEST(ObservedFusion, TolerancesDecideAndBadOptionsAreRejected) {
   EXPECT_EQ(fuseWithObserved(completed, {}).size(), 1u);
 }
 
+TEST(ObservedFusion, UnseenPlanesNearASeenDirectionAreTurnedParallelToIt) {
+  // Seen: the bottom z = 0 and the side x = 0 of a unit part. Predicted, unseen: the top, 4° off
+  // the seen bottom's direction, the far side y = 1, 6° off the third dominant axis (no seen
+  // face has it), and a 45° chamfer that matches no seen direction.
+  const double deg = 3.14159265358979 / 180.0;
+  const std::vector<PlanarPrimitive> observed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 10, 1.0f),
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
+  std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0.5, 0.5, 1.0}, {std::sin(4 * deg), 0, std::cos(4 * deg)}), {0.5, 0.5, 1}, 1.0, 6, 0.9f),
+      patch(Plane::fromPointAndNormal({0.5, 1.0, 0.5}, {0, std::cos(6 * deg), std::sin(6 * deg)}), {0.5, 1, 0.5}, 1.0, 6, 0.9f),
+      patch(Plane::fromPointAndNormal({1, 1, 1}, Eigen::Vector3d(1, 0, 1).normalized()), {1, 0.5, 1}, 0.4, 4, 0.85f)};
+  ObservedFusionReport report;
+  const auto unchanged = fuseWithObserved(completed, observed, {}, &report);  // off by default
+  EXPECT_EQ(report.aligned, 0u);
+  EXPECT_NEAR(unchanged[0].plane.normal.z(), std::cos(4 * deg), 1e-12);
+
+  ObservedFusionOptions options;
+  options.align_unseen_degrees = 10.0;
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(fused.size(), 5u);  // 3 completed + 2 seen faces added
+  EXPECT_EQ(report.aligned, 2u);
+  EXPECT_NE(describe(report).find("2 unseen aligned"), std::string::npos) << describe(report);
+  // The top: exactly +z (its outward side kept), through its points' centroid, points on it.
+  EXPECT_TRUE(fused[0].plane.normal.isApprox(Eigen::Vector3d(0, 0, 1), 1e-12));
+  EXPECT_NEAR(fused[0].plane.signedDistance({0.5, 0.5, 1.0}), 0.0, 1e-6);
+  EXPECT_LT(maxDistanceToPlane(fused[0], fused[0].plane), 1e-6);
+  // The far side: exactly +y, the axis the two seen faces imply.
+  EXPECT_TRUE(fused[1].plane.normal.isApprox(Eigen::Vector3d(0, 1, 0), 1e-12));
+  EXPECT_NEAR(fused[1].plane.signedDistance({0.5, 1.0, 0.5}), 0.0, 1e-6);
+  // The chamfer is 45° from everything seen: left alone.
+  EXPECT_TRUE(fused[2].plane.normal.isApprox(Eigen::Vector3d(1, 0, 1).normalized(), 1e-12));
+  options.align_unseen_degrees = -1.0;
+  EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+}
+
 }  // namespace
 }  // namespace paco

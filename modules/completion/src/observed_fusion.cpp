@@ -1,6 +1,7 @@
 #include <paco/completion/observed_fusion.h>
 
 #include <paco/common/error.h>
+#include <paco/common/orientation.h>
 
 #include <Eigen/Geometry>
 
@@ -46,19 +47,62 @@ double diagonalOf(const std::vector<PlanarPrimitive>& primitives) {
   return box.isEmpty() ? 0.0 : box.diagonal().norm();
 }
 
+// The seen directions: every trusted observed segment's normal and the dominant axes.
+std::vector<Eigen::Vector3d> seenDirections(const std::vector<PlanarPrimitive>& observed, std::size_t min_points) {
+  std::vector<Eigen::Vector3d> directions;
+  std::vector<double> sizes;
+  for (const auto& seen : observed) {
+    if (seen.points.size() < min_points || !(seen.plane.normal.norm() > 0.0)) continue;
+    directions.push_back(seen.plane.normal.normalized());
+    sizes.push_back(static_cast<double>(seen.points.size()));
+  }
+  if (const auto axes = dominantPlaneAxes(directions, sizes))
+    for (int k = 0; k < 3; ++k) directions.push_back(axes->col(k));
+  return directions;
+}
+
+// Turns the primitive's plane onto the nearest direction within max_angle (keeping its outward
+// side), through its points' centroid; true when it turned.
+bool alignWithNearest(PlanarPrimitive& primitive, const std::vector<Eigen::Vector3d>& directions, double max_angle) {
+  const Eigen::Vector3d normal = primitive.plane.normal.normalized();
+  const Eigen::Vector3d* nearest = nullptr;
+  double best = -1.0;
+  for (const auto& d : directions) {
+    const double c = std::abs(normal.dot(d));
+    if (c > best) {
+      best = c;
+      nearest = &d;
+    }
+  }
+  if (!nearest || std::acos(std::min(1.0, best)) > max_angle) return false;
+  const Eigen::Vector3d turned = normal.dot(*nearest) < 0.0 ? -*nearest : *nearest;
+  Eigen::Vector3d pivot = primitive.plane.foot();
+  if (!primitive.points.empty()) {
+    pivot.setZero();
+    for (const auto& p : primitive.points) pivot += position(p);
+    pivot /= static_cast<double>(primitive.points.size());
+  }
+  primitive.plane = Plane::fromPointAndNormal(pivot, turned);
+  projectOnto(primitive.plane, primitive.points);
+  return true;
+}
+
 }  // namespace
 
 std::string describe(const ObservedFusionReport& report) {
   return std::to_string(report.snapped) + " primitives took a seen plane, " + std::to_string(report.absorbed) +
-         " duplicates absorbed, " + std::to_string(report.added) + " seen faces added";
+         " duplicates absorbed, " + std::to_string(report.added) + " seen faces added" +
+         (report.aligned ? ", " + std::to_string(report.aligned) + " unseen aligned with seen directions" : "");
 }
 
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
                                               const std::vector<PlanarPrimitive>& observed,
                                               const ObservedFusionOptions& options, ObservedFusionReport* report) {
   if (!std::isfinite(options.max_angle_degrees) || options.max_angle_degrees < 0.0 ||
-      !std::isfinite(options.max_distance) || options.max_distance < 0.0)
-    throw InvalidInputError("fuseWithObserved: max_angle_degrees and max_distance must be finite and >= 0");
+      !std::isfinite(options.max_distance) || options.max_distance < 0.0 ||
+      !std::isfinite(options.align_unseen_degrees) || options.align_unseen_degrees < 0.0)
+    throw InvalidInputError(
+        "fuseWithObserved: max_angle_degrees, max_distance and align_unseen_degrees must be finite and >= 0");
   ObservedFusionReport counts;
   const double max_angle = options.max_angle_degrees * kPi / 180.0;
   const double max_distance = options.max_distance * diagonalOf(observed);
@@ -119,6 +163,12 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       absorbed[c] = true;
       ++counts.absorbed;
     }
+  }
+  if (options.align_unseen_degrees > 0.0) {
+    const auto directions = seenDirections(observed, options.min_observed_points);
+    const double max_align = options.align_unseen_degrees * kPi / 180.0;
+    for (std::size_t c = 0; c < completed.size(); ++c)
+      if (!snapped[c] && !absorbed[c] && alignWithNearest(completed[c], directions, max_align)) ++counts.aligned;
   }
   std::vector<PlanarPrimitive> fused;
   fused.reserve(completed.size() + unmatched.size());

@@ -238,7 +238,11 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
   completer.setInputProxies(proxies);
   std::vector<PlanarPrimitive> primitives;
   completer.complete(primitives);
-  if (options.fuse_observed) primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation));
+  if (options.fuse_observed) {
+    ObservedFusionOptions fusion;
+    fusion.align_unseen_degrees = options.align_unseen_degrees;
+    primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation), fusion);
+  }
   out.seconds["complete"] = secondsSince(start);
   if (primitives.empty()) {
     out.reason = FailureReason::NoMesh;

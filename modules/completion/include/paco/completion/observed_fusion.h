@@ -25,6 +25,12 @@ struct ObservedFusionOptions {
   double max_distance = 0.02;
   /// Observed segments with fewer points are ignored (too few to trust their plane).
   std::size_t min_observed_points = 10;
+  /// A completed primitive that took no seen plane is turned to be exactly parallel to a seen
+  /// face, or to one of the dominant seen axes (paco::dominantPlaneAxes), when its normal is
+  /// within this angle of it (degrees; about its points' centroid, points projected; 0 = off).
+  /// Piecewise-planar objects repeat a few directions: an unseen face a few degrees off a seen
+  /// direction is almost always the network's error, and slivers in the mesh follow from it.
+  double align_unseen_degrees = 0.0;
 };
 
 struct ObservedFusionReport {
@@ -33,9 +39,11 @@ struct ObservedFusionReport {
   std::size_t absorbed = 0; ///< further completed primitives of a seen face, merged into the one that took it
   std::size_t added = 0;    ///< observed segments that matched no completed primitive, added as they are
   std::size_t ignored = 0;  ///< observed segments below min_observed_points
+  std::size_t aligned = 0;  ///< unseen completed primitives turned parallel to a seen direction
 };
 
-/// One line for logs: "N primitives took a seen plane, N duplicates absorbed, N seen faces added".
+/// One line for logs: "N primitives took a seen plane, N duplicates absorbed, N seen faces added"
+/// (and ", N unseen aligned with seen directions" when alignment is on).
 std::string describe(const ObservedFusionReport& report);
 
 /// Fuses completed primitives (stage 3's output) with the observed ones (the input's segments,
@@ -46,8 +54,9 @@ std::string describe(const ObservedFusionReport& report);
 /// (the face was seen); later matches to the same primitive add their points. Other completed
 /// primitives within the tolerances of the same observed segment are duplicates: their points
 /// are projected onto the chosen one and they are removed. Unmatched observed segments are
-/// appended with confidence 1; unmatched completed primitives are kept unchanged. Throws
-/// InvalidInputError on tolerances that are negative or not finite.
+/// appended with confidence 1; unmatched completed primitives are kept, turned parallel to a seen
+/// direction when `align_unseen_degrees` allows. Throws InvalidInputError on tolerances that are
+/// negative or not finite.
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
                                               const std::vector<PlanarPrimitive>& observed,
                                               const ObservedFusionOptions& options = {},

@@ -62,6 +62,8 @@ struct MethodOptions {
   /// paco: fuse the completed primitives with the observed segments (paco::fuseWithObserved):
   /// seen faces keep their fitted planes and points, the network supplies the unseen ones.
   bool fuse_observed = true;
+  /// paco, with fusion: paco::ObservedFusionOptions::align_unseen_degrees (0 = off).
+  double align_unseen_degrees = 0.0;
   /// paco: LibTorch threads (process-wide, set when the model is first loaded; default 1, since
   /// the evaluation runs samples in parallel with --jobs).
   int completion_threads = 1;
