@@ -32,18 +32,10 @@ Normalization Normalization::fromBoundingBox(const std::vector<Eigen::Vector3d>&
   return fromBoundingBox(lo, hi);
 }
 
+// The identity turn is exact (x' = 1·x + 0·y + 0·z), so this is the axis-aligned box.
 template <typename PointT>
 Normalization Normalization::fromBoundingBox(const pcl::PointCloud<PointT>& cloud) {
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = -lo;
-  for (const auto& q : cloud) {
-    const Eigen::Vector3d p(q.x, q.y, q.z);
-    if (p.allFinite()) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-  }
-  return fromBoundingBox(lo, hi);
+  return fromBoundingBox(cloud, Eigen::Matrix3d::Identity());
 }
 
 template <typename PointT>

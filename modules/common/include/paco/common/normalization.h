@@ -42,7 +42,6 @@ struct Normalization {
   Eigen::Vector3d applyInverse(const Eigen::Vector3d& x) const { return rotation.transpose() * x / scale + center; }
   /// A direction (e.g. a normal): only turned.
   Eigen::Vector3d applyToDirection(const Eigen::Vector3d& d) const { return rotation * d; }
-  Eigen::Vector3d applyInverseToDirection(const Eigen::Vector3d& d) const { return rotation.transpose() * d; }
 
   Plane apply(const Plane& plane) const;
   Plane applyInverse(const Plane& plane) const;
