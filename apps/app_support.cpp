@@ -2,9 +2,11 @@
 
 #include <paco/common/error.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
 
 namespace paco::app {
@@ -36,6 +38,44 @@ boost::program_options::variables_map parseCommandLine(
     throw UsageError(e.what());
   }
   return vm;
+}
+
+double parseNonNegativeOrOff(const std::string& option, const std::string& text) {
+  if (text == "off") return std::numeric_limits<double>::infinity();
+  std::size_t used = 0;
+  double value = std::numeric_limits<double>::quiet_NaN();
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(value) || value < 0.0)
+    throw UsageError(option + " must be a number >= 0 or 'off', got '" + text + "'");
+  return value;
+}
+
+void FusionFlags::addTo(boost::program_options::options_description& options) {
+  namespace po = boost::program_options;
+  options.add_options()
+      ("align-unseen", po::value(&align_unseen_degrees)->default_value(align_unseen_degrees),
+       "with fusion: turn unseen primitives within this many degrees of a seen direction parallel to it (0: off)")
+      ("clip-margin", po::value(&clip_margin)->default_value(clip_margin),
+       "with fusion: drop completed points beyond the box of the seen points plus this fraction of its diagonal (off: keep all)")
+      ("fill-box", po::value(&fill_box_spacing)->default_value(fill_box_spacing),
+       "with fusion: cover the uncovered faces of the box of the seen points with points this far apart (fraction of its diagonal; 0: off)");
+}
+
+void FusionFlags::validate() const {
+  if (!(align_unseen_degrees >= 0.0 && align_unseen_degrees < 90.0))
+    throw UsageError("--align-unseen must be in [0, 90) degrees, got " + std::to_string(align_unseen_degrees));
+  if (!(fill_box_spacing >= 0.0 && fill_box_spacing < 1.0))
+    throw UsageError("--fill-box must be in [0, 1) (a fraction of the diagonal), got " + std::to_string(fill_box_spacing));
+  parseNonNegativeOrOff("--clip-margin", clip_margin);
+}
+
+double FusionFlags::clipMargin() const {
+  validate();
+  return parseNonNegativeOrOff("--clip-margin", clip_margin);
 }
 
 namespace {

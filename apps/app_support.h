@@ -26,6 +26,25 @@ boost::program_options::variables_map parseCommandLine(
     int argc, char** argv, const boost::program_options::options_description& options,
     const boost::program_options::positional_options_description& positional);
 
+/// The value of a non-negative option that can also be "off" (infinity): "--clip-margin 0.1".
+/// Anything else is a UsageError naming `option`.
+double parseNonNegativeOrOff(const std::string& option, const std::string& text);
+
+/// The observed-fusion options paco_reconstruct, paco_complete and paco_eval share, with the
+/// same names, defaults and checks (paco::ObservedFusionOptions has their meaning).
+struct FusionFlags {
+  double align_unseen_degrees = 0.0;
+  std::string clip_margin = "off";
+  double fill_box_spacing = 0.02;
+
+  /// Adds --align-unseen, --clip-margin and --fill-box, bound to the fields above.
+  void addTo(boost::program_options::options_description& options);
+  /// Throws UsageError when a value is out of range.
+  void validate() const;
+  /// --clip-margin as a number (infinity for "off"); validates.
+  double clipMargin() const;
+};
+
 /// An output path that is written to "<path>.partial" first and renamed into place by commit().
 /// Pending outputs that are never committed are deleted by runTool on failure and on destruction.
 class PendingOutput {

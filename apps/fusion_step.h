@@ -25,11 +25,13 @@ inline void reportCompletion(std::size_t primitives, double threshold, const Nor
 
 /// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`.
 inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
-                              const PlanarSegmentation& segmentation, double align_unseen_degrees, StageTimer& timer) {
+                              const PlanarSegmentation& segmentation, const FusionFlags& flags, StageTimer& timer) {
   timer.start("fuse");
   ObservedFusionReport report;
   ObservedFusionOptions options;
-  options.align_unseen_degrees = align_unseen_degrees;
+  options.align_unseen_degrees = flags.align_unseen_degrees;
+  options.clip_margin = flags.clipMargin();
+  options.fill_spacing = flags.fill_box_spacing;
   primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), options, &report);
   timer.stop();
   std::printf("fuse with the seen faces: %s\n", describe(report).c_str());

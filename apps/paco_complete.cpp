@@ -37,7 +37,7 @@ struct Options {
   double epsilon = 0.004;
   double threshold = 0.8;
   bool no_fusion = false;
-  double align_unseen = 0.0;
+  paco::app::FusionFlags fusion;
   int threads = 0;
   int points = 2048;
   bool use_labels = false;
@@ -70,13 +70,12 @@ int run(int argc, char** argv) {
       ("epsilon,e", po::value(&o.epsilon)->default_value(o.epsilon, "0.004"), "segmentation inlier distance, fraction of the bounding-box diagonal")
       ("use-labels", po::bool_switch(&o.use_labels), "use the input file's labels as the segmentation (no segmenter)")
       ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.8"), "keep primitives with confidence above this, in [0, 1]")
-      ("align-unseen", po::value(&o.align_unseen)->default_value(o.align_unseen),
-       "with fusion: turn unseen primitives within this many degrees of a seen direction parallel to it (0: off)")
       ("no-fusion", po::bool_switch(&o.no_fusion),
        "write the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("points", po::value(&o.points)->default_value(o.points), "points fed to the network (the training size)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch threads (0: one per hardware thread)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
+  o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
   po::positional_options_description positional;
@@ -95,8 +94,7 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--pcd must name a .pcd file, got '" + o.pcd + "'");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
-  if (!(o.align_unseen >= 0.0 && o.align_unseen < 90.0))
-    throw paco::app::UsageError("--align-unseen must be in [0, 90) degrees, got " + std::to_string(o.align_unseen));
+  o.fusion.validate();
   if (o.threads < 0) throw paco::app::UsageError("--threads must be >= 0");
 
   // Check everything that can be checked before the slow work: names, model file, input file.
@@ -182,7 +180,7 @@ int run(int argc, char** argv) {
   completer.complete(primitives);
   timer.stop();
   paco::app::reportCompletion(primitives.size(), o.threshold, proxies.normalization);
-  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.align_unseen, timer);
+  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
                  kTool);

@@ -40,7 +40,7 @@ struct Options {
   bool dataset_labels = false;
   bool quiet = false;
   std::string model, completion_frame = "own", observed_fusion = "on";
-  double align_unseen = 0.0;
+  paco::app::FusionFlags fusion;
   double threshold = 0.8;
   int threads = 1;
   bool no_normals = false;
@@ -148,8 +148,6 @@ int dataset(const Options& o) {
   b.views = intList(o.views, "views");
   b.limit = o.limit;
   if (o.jobs < 1) throw paco::app::UsageError("--jobs must be at least 1");
-  if (!(o.align_unseen >= 0.0 && o.align_unseen < 90.0))
-    throw paco::app::UsageError("--align-unseen must be in [0, 90) degrees, got " + std::to_string(o.align_unseen));
   if (o.observed_fusion != "on" && o.observed_fusion != "off")
     throw paco::app::UsageError("--observed-fusion must be on or off, got '" + o.observed_fusion + "'");
   b.jobs = o.jobs;
@@ -164,7 +162,9 @@ int dataset(const Options& o) {
   b.method.completion_frame = o.completion_frame;
   b.method.confidence_threshold = o.threshold;
   b.method.fuse_observed = o.observed_fusion == "on";
-  b.method.align_unseen_degrees = o.align_unseen;
+  b.method.align_unseen_degrees = o.fusion.align_unseen_degrees;
+  b.method.clip_margin = o.fusion.clipMargin();
+  b.method.fill_box_spacing = o.fusion.fill_box_spacing;
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
   b.metrics.num_samples = o.samples;
@@ -213,12 +213,11 @@ int run(int argc, char** argv) {
       ("threads", po::value(&o.threads)->default_value(o.threads), "paco: LibTorch threads")
       ("observed-fusion", po::value(&o.observed_fusion)->default_value(o.observed_fusion),
        "paco: on (seen faces keep their fitted planes and points, the network adds the unseen) or off (the network's primitives alone, as the paper)")
-      ("align-unseen", po::value(&o.align_unseen)->default_value(o.align_unseen),
-       "paco, with fusion: turn unseen primitives within this many degrees of a seen direction parallel to it (0 = off)")
       ("no-normals", po::bool_switch(&o.no_normals), "give the methods the input points without normals (they are estimated)")
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");
+  o.fusion.addTo(visible);  // paco, with fusion
   const po::variables_map vm = paco::app::parseCommandLine(argc, argv, visible, {});
   if (vm.count("help")) {
     printHelp(visible);

@@ -39,7 +39,7 @@ struct Options {
   std::string model;
   double threshold = 0.8;
   bool no_fusion = false;
-  double align_unseen = 0.0;
+  paco::app::FusionFlags fusion;
   std::string assembler = "polyfit";
   std::string solver = "cbc";
   double time_limit = 60.0;
@@ -78,8 +78,6 @@ int run(int argc, char** argv) {
       ("model", po::value(&o.model), "model file (default: the shipped model, or $PACO_MODEL)")
       ("no-completion", po::bool_switch(&o.no_completion), "assemble the segments of the input as they are (the direct baseline)")
       ("threshold", po::value(&o.threshold)->default_value(o.threshold), "keep completed primitives with confidence above this, in [0, 1]")
-      ("align-unseen", po::value(&o.align_unseen)->default_value(o.align_unseen),
-       "with fusion: turn unseen primitives within this many degrees of a seen direction parallel to it (0: off)")
       ("no-fusion", po::bool_switch(&o.no_fusion),
        "use the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("assembler", po::value(&o.assembler)->default_value(o.assembler), "polyfit or cell-complex")
@@ -89,6 +87,7 @@ int run(int argc, char** argv) {
        "polyfit: leave out the least confident unseen primitives until the candidate faces fit (0: no limit)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
+  o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
   po::positional_options_description positional;
@@ -101,8 +100,7 @@ int run(int argc, char** argv) {
   if (o.input.empty()) throw paco::app::UsageError("expected an INPUT cloud");
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
-  if (!(o.align_unseen >= 0.0 && o.align_unseen < 90.0))
-    throw paco::app::UsageError("--align-unseen must be in [0, 90) degrees, got " + std::to_string(o.align_unseen));
+  o.fusion.validate();
   if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
   if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
 
@@ -169,7 +167,7 @@ int run(int argc, char** argv) {
     completer.complete(primitives);
     timer.stop();
     paco::app::reportCompletion(primitives.size(), o.threshold, proxies.normalization);
-    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.align_unseen, timer);
+    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 

@@ -100,8 +100,13 @@ TEST(PacoReconstruct, FusionKeepsTheSeenFacesWhenTheNetworkKeepsNothing) {
   ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("fused.obj")), &log), 0) << log;
   EXPECT_NE(log.find("complete: 0 primitives"), std::string::npos) << log;
   EXPECT_NE(log.find("fuse with the seen faces: 0 primitives took a seen plane"), std::string::npos) << log;
+  // By default the box of the seen points fills what nothing covers; --fill-box 0 turns it off.
+  EXPECT_NE(log.find("points filled on the seen box"), std::string::npos) << log;
   const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("fused.obj"));
   EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("unfilled.obj")) + " --fill-box 0", &log), 0) << log;
+  EXPECT_EQ(log.find("points filled"), std::string::npos) << log;
+  EXPECT_TRUE(paco::analyseTopology(paco::io::loadMesh(dir.file("unfilled.obj"))).isClosedManifold());
 
   const fs::path out_dir = dir.file("nofusion");
   fs::create_directories(out_dir);
@@ -158,8 +163,13 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()), &log), 2) << log;
   EXPECT_NE(log.find("-o MESH"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --threshold 2", &log), 2) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --clip-margin near", &log), 2) << log;
+  EXPECT_NE(log.find("--clip-margin must be a number >= 0 or 'off', got 'near'"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --fill-box -0.1", &log), 2) << log;
+  EXPECT_NE(log.find("--fill-box must be in [0, 1)"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
+  EXPECT_NE(log.find("--fill-box"), std::string::npos);
 }
 
 TEST(PacoReconstruct, UnknownBackendNamesAreRejectedBeforeAnyWork) {

@@ -29,6 +29,13 @@ PlanarPrimitive patch(const Plane& plane, const Eigen::Vector3d& centre, double 
   return primitive;
 }
 
+// Fusion alone, without the box fill (which these tests of matching would otherwise see).
+ObservedFusionOptions fusionOnly() {
+  ObservedFusionOptions options;
+  options.fill_spacing = 0.0;
+  return options;
+}
+
 double maxDistanceToPlane(const PlanarPrimitive& primitive, const Plane& plane) {
   double largest = 0.0;
   for (const auto& p : primitive.points) largest = std::max(largest, std::abs(plane.signedDistance({p.x, p.y, p.z})));
@@ -46,7 +53,7 @@ TEST(ObservedFusion, APredictedPlaneTakesTheObservedPlaneAndPoints) {
   std::vector<PlanarPrimitive> completed = {patch(predicted_plane, {0, 0, 1}, 1.0, 8, 0.9f)};
 
   ObservedFusionReport report;
-  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  const auto fused = fuseWithObserved(completed, observed, fusionOnly(), &report);
   ASSERT_EQ(fused.size(), 1u);
   EXPECT_EQ(report.snapped, 1u);
   EXPECT_EQ(report.added, 0u);
@@ -66,7 +73,7 @@ TEST(ObservedFusion, UnseenPredictionsStayAndUnmatchedObservationsAreAdded) {
   const std::vector<PlanarPrimitive> observed = {patch(seen, {0, 0.5, 0.5}, 1.0, 10, 1.0f)};
   const std::vector<PlanarPrimitive> completed = {patch(hidden, {1, 0.5, 0.5}, 1.0, 8, 0.8f)};
   ObservedFusionReport report;
-  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  const auto fused = fuseWithObserved(completed, observed, fusionOnly(), &report);
   ASSERT_EQ(fused.size(), 2u);
   EXPECT_EQ(report.snapped, 0u);
   EXPECT_EQ(report.added, 1u);
@@ -90,7 +97,7 @@ TEST(ObservedFusion, ASplitObservedFaceJoinsOnePrimitiveAndTinySegmentsAreIgnore
   const std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0, 0.005, 0}, {0, 1, 0}), {0, 0, 0}, 2.0, 5, 0.95f)};
   ObservedFusionReport report;
-  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  const auto fused = fuseWithObserved(completed, observed, fusionOnly(), &report);
   ASSERT_EQ(fused.size(), 1u);
   EXPECT_EQ(report.snapped, 1u);  // the larger half (64 points) sets the plane
   EXPECT_EQ(report.joined, 1u);   // the other half (36) adds its points
@@ -110,7 +117,7 @@ TEST(ObservedFusion, DuplicatePredictionsOfASeenFaceAreAbsorbed) {
       patch(Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1}), {0, 0, 1}, 1.0, 4, 0.85f),
       patch(Plane::fromPointAndNormal({0, 0, 0.015}, {0, std::sin(a4), -std::cos(a4)}), {0, 0, 0}, 1.0, 5, 0.8f)};
   ObservedFusionReport report;
-  const auto fused = fuseWithObserved(completed, observed, {}, &report);
+  const auto fused = fuseWithObserved(completed, observed, fusionOnly(), &report);
   ASSERT_EQ(fused.size(), 2u);
   EXPECT_EQ(report.snapped, 1u);
   EXPECT_EQ(report.absorbed, 1u);
@@ -128,9 +135,9 @@ TEST(ObservedFusion, TolerancesDecideAndBadOptionsAreRejected) {
   const std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0, 0, 0}, {std::sin(tilt), 0, std::cos(tilt)}), {0, 0, 0}, 1.0, 4, 0.9f)};
   ObservedFusionReport report;
-  EXPECT_EQ(fuseWithObserved(completed, observed, {}, &report).size(), 2u);
+  EXPECT_EQ(fuseWithObserved(completed, observed, fusionOnly(), &report).size(), 2u);
   EXPECT_EQ(report.added, 1u);
-  ObservedFusionOptions wide;
+  ObservedFusionOptions wide = fusionOnly();
   wide.max_angle_degrees = 20.0;
   wide.max_distance = 0.1;
   EXPECT_EQ(fuseWithObserved(completed, observed, wide, &report).size(), 1u);
@@ -142,7 +149,7 @@ TEST(ObservedFusion, TolerancesDecideAndBadOptionsAreRejected) {
   bad.max_angle_degrees = std::nan("");
   EXPECT_THROW(fuseWithObserved(completed, observed, bad), InvalidInputError);
   // Nothing observed: the completion is returned as it is.
-  EXPECT_EQ(fuseWithObserved(completed, {}).size(), 1u);
+  EXPECT_EQ(fuseWithObserved(completed, {}).size(), 1u);  // (nor a box to fill)
 }
 
 TEST(ObservedFusion, UnseenPlanesNearASeenDirectionAreTurnedParallelToIt) {
@@ -158,11 +165,11 @@ TEST(ObservedFusion, UnseenPlanesNearASeenDirectionAreTurnedParallelToIt) {
       patch(Plane::fromPointAndNormal({0.5, 1.0, 0.5}, {0, std::cos(6 * deg), std::sin(6 * deg)}), {0.5, 1, 0.5}, 1.0, 6, 0.9f),
       patch(Plane::fromPointAndNormal({1, 1, 1}, Eigen::Vector3d(1, 0, 1).normalized()), {1, 0.5, 1}, 0.4, 4, 0.85f)};
   ObservedFusionReport report;
-  const auto unchanged = fuseWithObserved(completed, observed, {}, &report);  // off by default
+  const auto unchanged = fuseWithObserved(completed, observed, fusionOnly(), &report);  // off by default
   EXPECT_EQ(report.aligned, 0u);
   EXPECT_NEAR(unchanged[0].plane.normal.z(), std::cos(4 * deg), 1e-12);
 
-  ObservedFusionOptions options;
+  ObservedFusionOptions options = fusionOnly();
   options.align_unseen_degrees = 10.0;
   const auto fused = fuseWithObserved(completed, observed, options, &report);
   ASSERT_EQ(fused.size(), 5u);  // 3 completed + 2 seen faces added
@@ -178,6 +185,89 @@ TEST(ObservedFusion, UnseenPlanesNearASeenDirectionAreTurnedParallelToIt) {
   // The chamfer is 45° from everything seen: left alone.
   EXPECT_TRUE(fused[2].plane.normal.isApprox(Eigen::Vector3d(1, 0, 1).normalized(), 1e-12));
   options.align_unseen_degrees = -1.0;
+  EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+}
+
+TEST(ObservedFusion, PredictionsFarOutsideTheSeenBoxAreClipped) {
+  // Seen: the bottom z = 0 (x, y in 0.05..0.95) and the side x = 0 (y, z in 0.0625..0.9375).
+  // Their box, grown by 0.1 of its diagonal (1.61): x in [-0.16, 1.11], y in [-0.11, 1.11],
+  // z in [-0.16, 1.10].
+  const std::vector<PlanarPrimitive> observed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 10, 1.0f),
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
+  // Predicted: the seen bottom, too wide (a 10 x 10 grid at -0.4, -0.2, ..., 1.4: 6 x 6 inside);
+  // the unseen top, a little too wide (14 x 14 at -0.15, -0.05, ..., 1.15: 13 x 12 inside); and
+  // a face at x = 2.5, far outside.
+  const std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 2.0, 10, 0.9f),
+      patch(Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1}), {0.5, 0.5, 1}, 1.4, 14, 0.9f),
+      patch(Plane::fromPointAndNormal({2.5, 0, 0}, {1, 0, 0}), {2.5, 0.5, 0.5}, 1.0, 6, 0.85f)};
+  ObservedFusionReport report;
+  EXPECT_EQ(fuseWithObserved(completed, observed, fusionOnly(), &report).size(), 4u);  // off by default
+  EXPECT_EQ(report.clipped_points, 0u);
+
+  ObservedFusionOptions options = fusionOnly();
+  options.clip_margin = 0.1;
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(fused.size(), 3u);  // the far face is gone; the seen side is added
+  EXPECT_EQ(report.clipped_points, 64u + 40u + 36u);
+  EXPECT_EQ(report.clipped, 1u);
+  EXPECT_NE(describe(report).find("140 points outside the seen box dropped (1 unseen"), std::string::npos)
+      << describe(report);
+  // A seen face loses its outside points but stays, whatever it lost.
+  EXPECT_EQ(fused[0].points.size(), 36u + 100u);
+  EXPECT_NEAR(fused[1].plane.signedDistance({0, 0, 1}), 0.0, 1e-12);
+  EXPECT_EQ(fused[1].points.size(), 13u * 12u);
+  EXPECT_EQ(fused[2].points.size(), 64u);
+  for (double bad : {-0.1, std::nan("")}) {
+    options.clip_margin = bad;
+    EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+  }
+}
+
+TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
+  // Seen: the bottom z = 0 (x, y in 0.05..0.95) and the side x = 0 (y, z in 0.0625..0.9375); box
+  // x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375], diagonal 1.61. Predicted: the top,
+  // covering the box's top face. Left uncovered: the faces x = 0.95, y = 0.05 and y = 0.95.
+  const std::vector<PlanarPrimitive> observed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 10, 1.0f),
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
+  const std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0.9375}, {0, 0, 1}), {0.5, 0.5, 0.9375}, 1.0, 10, 0.9f)};
+  ObservedFusionReport report;
+  EXPECT_EQ(fuseWithObserved(completed, observed, fusionOnly(), &report).size(), 3u);
+  EXPECT_EQ(report.filled_points, 0u);
+  EXPECT_EQ(ObservedFusionOptions{}.fill_spacing, 0.02);  // on by default
+
+  ObservedFusionOptions options;
+  options.fill_spacing = 0.05;       // 0.08 apart
+  options.fill_empty_radius = 0.05;  // nothing within 0.08
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  EXPECT_EQ(report.filled_faces, 3u);
+  ASSERT_EQ(fused.size(), 6u);
+  EXPECT_EQ(fused[0].points.size(), 100u);  // the predicted top covered its face: nothing added
+  EXPECT_NE(describe(report).find("3 new box faces"), std::string::npos) << describe(report);
+  const Eigen::Vector3d expected_normals[] = {{1, 0, 0}, {0, -1, 0}, {0, 1, 0}};
+  const double expected_offsets[] = {0.95, 0.05, 0.95};
+  std::size_t new_points = 0;
+  for (int f = 0; f < 3; ++f) {
+    const PlanarPrimitive& face = fused[3 + f];
+    EXPECT_TRUE(face.plane.normal.isApprox(expected_normals[f], 1e-9)) << face.plane.normal.transpose();
+    EXPECT_NEAR(face.plane.signedDistance(expected_offsets[f] * expected_normals[f].cwiseAbs()), 0.0, 1e-6);
+    EXPECT_FLOAT_EQ(face.confidence, 0.99f);  // above the network's guesses, below a seen face
+    // A 0.95 x 0.9375 face at 0.08 spacing holds about 13 x 13 points, less the rows near seen ones.
+    EXPECT_GT(face.points.size(), 100u);
+    new_points += face.points.size();
+    for (const auto& p : face.points) {
+      EXPECT_LT(std::abs(face.plane.signedDistance({p.x, p.y, p.z})), 1e-6);
+      for (const auto& seen : observed)
+        for (const auto& q : seen.points)
+          ASSERT_GT((Eigen::Vector3d(p.x, p.y, p.z) - Eigen::Vector3d(q.x, q.y, q.z)).norm(), 0.05 * 1.6);
+    }
+  }
+  // Whatever else was filled (a few points at the seen faces' edges) joined the seen faces.
+  EXPECT_EQ(report.filled_points, new_points + (fused[1].points.size() - 100u) + (fused[2].points.size() - 64u));
+  options.fill_spacing = -0.1;
   EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
 }
 

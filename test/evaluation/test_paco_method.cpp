@@ -75,7 +75,7 @@ TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
   ASSERT_TRUE(out.has_planes) << out.message;
   const std::size_t queries = static_cast<std::size_t>(paco::test::tinyModelConfig().kept_queries);
   EXPECT_GE(out.planes.size(), queries);
-  EXPECT_LE(out.planes.size(), queries + 5);
+  EXPECT_LE(out.planes.size(), queries + 5 + 6);  // + the seen faces + the box faces the fill added
   // Whether a prediction took it or it was added, each of the five seen faces' fitted planes is
   // among the assembler's input (the untrained network alone would place them anywhere).
   const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> faces = {
@@ -87,6 +87,12 @@ TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
       found = found || (std::abs(plane.normal.dot(normal)) > 1.0 - 1e-6 && std::abs(plane.signedDistance(point)) < 1e-5);
     EXPECT_TRUE(found) << "no plane through " << point.transpose() << " with normal " << normal.transpose();
   }
+  // The open top is the one face of the seen box that nothing covers: the box fill (on by
+  // default) closes it with a plane at the top of the seen sides, z = 0.2.
+  bool top = false;
+  for (const paco::Plane& plane : out.planes)
+    top = top || (std::abs(plane.normal.z()) > 1.0 - 1e-6 && std::abs(plane.signedDistance({0, 0, 0.2})) < 0.01);
+  EXPECT_TRUE(top);
 }
 
 TEST(PacoMethod, BadFrameAndMissingModelAreFailuresThatSayWhy) {

@@ -57,6 +57,11 @@ void kdTreeNearest(const float* data, std::int64_t n_data, const float* queries,
 
 }  // namespace
 
+void nearestIn(const float* data, std::int64_t n_data, const float* queries, std::int64_t n_queries,
+               std::int64_t* nearest) {
+  if (n_queries > 0) kdTreeNearest(data, n_data, queries, n_queries, nearest);
+}
+
 void mutualNearest(const float* a, std::int64_t na, const float* b, std::int64_t nb, std::int64_t* nearest_in_b,
                    std::int64_t* nearest_in_a) {
   if (na * nb > kBruteForcePairs) {

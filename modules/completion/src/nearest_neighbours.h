@@ -15,6 +15,11 @@ namespace paco::completion::detail {
 void mutualNearest(const float* a, std::int64_t na, const float* b, std::int64_t nb, std::int64_t* nearest_in_b,
                    std::int64_t* nearest_in_a);
 
+/// For each of the `n_queries` query points the index of its nearest point of `data` (`n_data`
+/// > 0 points; exact, one FLANN kd-tree over `data`).
+void nearestIn(const float* data, std::int64_t n_data, const float* queries, std::int64_t n_queries,
+               std::int64_t* nearest);
+
 /// Above this many pairs mutualNearest() uses kd-trees.
 constexpr std::int64_t kBruteForcePairs = std::int64_t{1} << 21;
 

@@ -1,5 +1,7 @@
 #include <paco/completion/observed_fusion.h>
 
+#include "nearest_neighbours.h"
+
 #include <paco/common/error.h>
 #include <paco/common/orientation.h>
 
@@ -87,12 +89,159 @@ bool alignWithNearest(PlanarPrimitive& primitive, const std::vector<Eigen::Vecto
   return true;
 }
 
+// The observed points' box on the dominant seen axes (identity without them), grown by `margin`
+// on every side; keeps the points inside it and returns how many went.
+struct SeenBox {
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // columns
+  Eigen::AlignedBox3d box;                             // in axes coordinates
+  bool contains(const pcl::PointNormal& p) const { return box.contains(axes.transpose() * position(p)); }
+};
+
+SeenBox seenBox(const std::vector<PlanarPrimitive>& observed, std::size_t min_points, double margin) {
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<double> sizes;
+  for (const auto& seen : observed) {
+    if (seen.points.size() < min_points || !(seen.plane.normal.norm() > 0.0)) continue;
+    normals.push_back(seen.plane.normal);
+    sizes.push_back(static_cast<double>(seen.points.size()));
+  }
+  SeenBox result;
+  if (const auto axes = dominantPlaneAxes(normals, sizes)) result.axes = *axes;
+  for (const auto& seen : observed)
+    for (const auto& p : seen.points) result.box.extend(result.axes.transpose() * position(p));
+  if (!result.box.isEmpty()) {
+    const Eigen::Vector3d grow = Eigen::Vector3d::Constant(margin * result.box.diagonal().norm());
+    result.box.min() -= grow;
+    result.box.max() += grow;
+  }
+  return result;
+}
+
+std::size_t keepInside(const SeenBox& seen, pcl::PointCloud<pcl::PointNormal>& points) {
+  const std::size_t before = points.size();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < before; ++i)
+    if (seen.contains(points[i])) points[kept++] = points[i];
+  points.resize(kept);
+  return before - kept;
+}
+
+// Distance of each query point to its nearest point of the clouds (infinity when they are empty).
+std::vector<double> nearestDistances(const std::vector<Eigen::Vector3d>& queries,
+                                     const std::vector<const pcl::PointCloud<pcl::PointNormal>*>& clouds) {
+  std::vector<float> targets;
+  for (const auto* cloud : clouds)
+    for (const auto& p : *cloud) targets.insert(targets.end(), {p.x, p.y, p.z});
+  std::vector<double> distances(queries.size(), std::numeric_limits<double>::infinity());
+  if (queries.empty() || targets.empty()) return distances;
+  std::vector<float> rows;
+  rows.reserve(3 * queries.size());
+  for (const auto& q : queries) rows.insert(rows.end(), {float(q.x()), float(q.y()), float(q.z())});
+  std::vector<std::int64_t> nearest(queries.size());
+  completion::detail::nearestIn(targets.data(), static_cast<std::int64_t>(targets.size() / 3), rows.data(),
+                                static_cast<std::int64_t>(queries.size()), nearest.data());
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    const float* t = &targets[3 * static_cast<std::size_t>(nearest[i])];
+    distances[i] = (queries[i] - Eigen::Vector3d(t[0], t[1], t[2])).norm();
+  }
+  return distances;
+}
+
+// Adds grid points on the faces of the seen box where no fused point is near (see
+// ObservedFusionOptions::fill_spacing).
+void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std::vector<PlanarPrimitive>& fused,
+                 ObservedFusionReport& counts) {
+  if (seen.box.isEmpty()) return;
+  const double diagonal = seen.box.diagonal().norm();
+  if (!(diagonal > 0.0)) return;
+  const double step = options.fill_spacing * diagonal, radius = options.fill_empty_radius * diagonal;
+  const double max_angle = options.max_angle_degrees * kPi / 180.0;
+  const double max_offset = options.max_distance * diagonal;
+  const Eigen::Vector3d lo = seen.box.min(), hi = seen.box.max();
+  // Grids of all six faces first, all tested against the fused points as they were.
+  struct Face {
+    Plane plane;
+    std::vector<Eigen::Vector3d> points;
+  };
+  std::vector<Face> faces;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const int nu = std::max(1, static_cast<int>(std::ceil((hi[u] - lo[u]) / step)));
+    const int nv = std::max(1, static_cast<int>(std::ceil((hi[v] - lo[v]) / step)));
+    for (int side = 0; side < 2; ++side) {
+      Eigen::Vector3d local = Eigen::Vector3d::Zero();
+      local[axis] = side ? hi[axis] : lo[axis];
+      Face face;
+      face.plane = Plane::fromPointAndNormal(seen.axes * local, (side ? 1.0 : -1.0) * seen.axes.col(axis));
+      for (int i = 0; i <= nu; ++i)
+        for (int j = 0; j <= nv; ++j) {
+          local[u] = lo[u] + (hi[u] - lo[u]) * i / nu;
+          local[v] = lo[v] + (hi[v] - lo[v]) * j / nv;
+          face.points.push_back(seen.axes * local);
+        }
+      faces.push_back(std::move(face));
+    }
+  }
+  std::vector<const pcl::PointCloud<pcl::PointNormal>*> clouds;
+  for (const auto& primitive : fused) clouds.push_back(&primitive.points);
+  std::vector<Eigen::Vector3d> all;
+  for (const auto& face : faces) all.insert(all.end(), face.points.begin(), face.points.end());
+  const std::vector<double> distances = nearestDistances(all, clouds);
+  std::size_t next = 0;
+  for (const auto& face : faces) {
+    std::vector<Eigen::Vector3d> empty;
+    for (const auto& q : face.points)
+      if (distances[next++] > radius) empty.push_back(q);
+    if (empty.empty()) continue;
+    // The fused primitive nearest to the face's plane within the fusion tolerances hosts them.
+    PlanarPrimitive* host = nullptr;
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& q : empty) centroid += q;
+    centroid /= static_cast<double>(empty.size());
+    for (auto& primitive : fused) {
+      if (primitive.plane.unorientedAngleTo(face.plane) > max_angle) continue;
+      const double d = std::abs(primitive.plane.signedDistance(centroid));
+      if (d <= max_offset && d < best) {
+        best = d;
+        host = &primitive;
+      }
+    }
+    if (!host) {
+      fused.emplace_back();
+      host = &fused.back();
+      host->plane = face.plane;
+      // Below a seen face (1) but above the network's guesses: the seen extent implies it, and
+      // PolyFit's candidate-face budget leaves out the least confident primitives first.
+      host->confidence = 0.99f;
+      ++counts.filled_faces;
+    }
+    pcl::PointCloud<pcl::PointNormal> added;
+    for (const auto& q : empty) {
+      pcl::PointNormal p;
+      p.x = static_cast<float>(q.x());
+      p.y = static_cast<float>(q.y());
+      p.z = static_cast<float>(q.z());
+      added.push_back(p);
+    }
+    projectOnto(host->plane, added);
+    host->points += added;
+    counts.filled_points += added.size();
+  }
+}
+
 }  // namespace
 
 std::string describe(const ObservedFusionReport& report) {
   return std::to_string(report.snapped) + " primitives took a seen plane, " + std::to_string(report.absorbed) +
          " duplicates absorbed, " + std::to_string(report.added) + " seen faces added" +
-         (report.aligned ? ", " + std::to_string(report.aligned) + " unseen aligned with seen directions" : "");
+         (report.aligned ? ", " + std::to_string(report.aligned) + " unseen aligned with seen directions" : "") +
+         (report.clipped_points ? ", " + std::to_string(report.clipped_points) + " points outside the seen box dropped (" +
+                                      std::to_string(report.clipped) + " unseen primitives with them)"
+                                : "") +
+         (report.filled_points ? ", " + std::to_string(report.filled_points) + " points filled on the seen box (" +
+                                     std::to_string(report.filled_faces) + " new box faces)"
+                               : "");
 }
 
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
@@ -100,9 +249,12 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
                                               const ObservedFusionOptions& options, ObservedFusionReport* report) {
   if (!std::isfinite(options.max_angle_degrees) || options.max_angle_degrees < 0.0 ||
       !std::isfinite(options.max_distance) || options.max_distance < 0.0 ||
-      !std::isfinite(options.align_unseen_degrees) || options.align_unseen_degrees < 0.0)
+      !std::isfinite(options.align_unseen_degrees) || options.align_unseen_degrees < 0.0 ||
+      std::isnan(options.clip_margin) || options.clip_margin < 0.0 || !std::isfinite(options.fill_spacing) ||
+      options.fill_spacing < 0.0 || !std::isfinite(options.fill_empty_radius) || options.fill_empty_radius < 0.0)
     throw InvalidInputError(
-        "fuseWithObserved: max_angle_degrees, max_distance and align_unseen_degrees must be finite and >= 0");
+        "fuseWithObserved: max_angle_degrees, max_distance, align_unseen_degrees, fill_spacing and "
+        "fill_empty_radius must be finite and >= 0, clip_margin >= 0 (infinity = off)");
   ObservedFusionReport counts;
   const double max_angle = options.max_angle_degrees * kPi / 180.0;
   const double max_distance = options.max_distance * diagonalOf(observed);
@@ -170,11 +322,28 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     for (std::size_t c = 0; c < completed.size(); ++c)
       if (!snapped[c] && !absorbed[c] && alignWithNearest(completed[c], directions, max_align)) ++counts.aligned;
   }
+  std::vector<bool> clipped(completed.size(), false);
+  if (std::isfinite(options.clip_margin) && !observed.empty()) {
+    // Observed points lie inside by construction: only predicted ones go.
+    const SeenBox box = seenBox(observed, options.min_observed_points, options.clip_margin);
+    for (std::size_t c = 0; c < completed.size(); ++c) {
+      if (absorbed[c]) continue;
+      const std::size_t before = completed[c].points.size();
+      const std::size_t gone = keepInside(box, completed[c].points);
+      counts.clipped_points += gone;
+      if (!snapped[c] && 2 * gone > before) {
+        clipped[c] = true;
+        ++counts.clipped;
+      }
+    }
+  }
   std::vector<PlanarPrimitive> fused;
   fused.reserve(completed.size() + unmatched.size());
   for (std::size_t c = 0; c < completed.size(); ++c)
-    if (!absorbed[c]) fused.push_back(std::move(completed[c]));
+    if (!absorbed[c] && !clipped[c]) fused.push_back(std::move(completed[c]));
   for (auto& primitive : unmatched) fused.push_back(std::move(primitive));
+  if (options.fill_spacing > 0.0 && !observed.empty())
+    fillSeenBox(seenBox(observed, options.min_observed_points, 0.0), options, fused, counts);
   if (report) *report = counts;
   return fused;
 }

@@ -238,12 +238,16 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
   completer.setInputProxies(proxies);
   std::vector<PlanarPrimitive> primitives;
   completer.complete(primitives);
+  out.seconds["complete"] = secondsSince(start);
   if (options.fuse_observed) {
+    const auto fuse_start = std::chrono::steady_clock::now();
     ObservedFusionOptions fusion;
     fusion.align_unseen_degrees = options.align_unseen_degrees;
+    fusion.clip_margin = options.clip_margin;
+    fusion.fill_spacing = options.fill_box_spacing;
     primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation), fusion);
+    out.seconds["fuse"] = secondsSince(fuse_start);
   }
-  out.seconds["complete"] = secondsSince(start);
   if (primitives.empty()) {
     out.reason = FailureReason::NoMesh;
     out.message = "no completed primitive above the confidence threshold";

@@ -242,8 +242,8 @@ std::string EvaluationRecord::key() const {
 }
 
 const std::vector<std::string>& stageNames() {
-  static const std::vector<std::string> names = {"segment", "complete", "prior", "reconstruct", "simplify",
-                                                 "assemble", "evaluate", "total"};
+  static const std::vector<std::string> names = {"segment",  "complete", "fuse",     "prior", "reconstruct",
+                                                 "simplify", "assemble", "evaluate", "total"};
   return names;
 }
 

@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -64,6 +65,10 @@ struct MethodOptions {
   bool fuse_observed = true;
   /// paco, with fusion: paco::ObservedFusionOptions::align_unseen_degrees (0 = off).
   double align_unseen_degrees = 0.0;
+  /// paco, with fusion: paco::ObservedFusionOptions::clip_margin (infinity = off).
+  double clip_margin = std::numeric_limits<double>::infinity();
+  /// paco, with fusion: paco::ObservedFusionOptions::fill_spacing (0 = off).
+  double fill_box_spacing = 0.02;
   /// paco: LibTorch threads (process-wide, set when the model is first loaded; default 1, since
   /// the evaluation runs samples in parallel with --jobs).
   int completion_threads = 1;
