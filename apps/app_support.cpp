@@ -68,8 +68,10 @@ void FusionFlags::addTo(boost::program_options::options_description& options) {
 void FusionFlags::validate() const {
   if (!(align_unseen_degrees >= 0.0 && align_unseen_degrees < 90.0))
     throw UsageError("--align-unseen must be in [0, 90) degrees, got " + std::to_string(align_unseen_degrees));
-  if (!(fill_box_spacing >= 0.0 && fill_box_spacing < 1.0))
-    throw UsageError("--fill-box must be in [0, 1) (a fraction of the diagonal), got " + std::to_string(fill_box_spacing));
+  // 0.001 is paco::kMinFillSpacing; app_support does not depend on the completion module.
+  if (!(fill_box_spacing == 0.0 || (fill_box_spacing >= 0.001 && fill_box_spacing < 1.0)))
+    throw UsageError("--fill-box must be 0 (off) or in [0.001, 1) (a fraction of the diagonal), got " +
+                     std::to_string(fill_box_spacing));
   parseNonNegativeOrOff("--clip-margin", clip_margin);
 }
 

@@ -166,7 +166,7 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --clip-margin near", &log), 2) << log;
   EXPECT_NE(log.find("--clip-margin must be a number >= 0 or 'off', got 'near'"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --fill-box -0.1", &log), 2) << log;
-  EXPECT_NE(log.find("--fill-box must be in [0, 1)"), std::string::npos) << log;
+  EXPECT_NE(log.find("--fill-box must be 0 (off) or in [0.001, 1)"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
   EXPECT_NE(log.find("--fill-box"), std::string::npos);

@@ -267,8 +267,10 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   }
   // Whatever else was filled (a few points at the seen faces' edges) joined the seen faces.
   EXPECT_EQ(report.filled_points, new_points + (fused[1].points.size() - 100u) + (fused[2].points.size() - 64u));
-  options.fill_spacing = -0.1;
-  EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+  for (double bad : {-0.1, 1e-5}) {  // negative; so fine the grid would hold billions of points
+    options.fill_spacing = bad;
+    EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+  }
 }
 
 }  // namespace

@@ -89,14 +89,14 @@ bool alignWithNearest(PlanarPrimitive& primitive, const std::vector<Eigen::Vecto
   return true;
 }
 
-// The observed points' box on the dominant seen axes (identity without them), grown by `margin`
-// on every side; keeps the points inside it and returns how many went.
+// The box of the observed points on the dominant seen axes (the coordinate axes without them).
 struct SeenBox {
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // columns
   Eigen::AlignedBox3d box;                             // in axes coordinates
   bool contains(const pcl::PointNormal& p) const { return box.contains(axes.transpose() * position(p)); }
 };
 
+// Grown by `margin` times its diagonal on every side.
 SeenBox seenBox(const std::vector<PlanarPrimitive>& observed, std::size_t min_points, double margin) {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
@@ -117,6 +117,7 @@ SeenBox seenBox(const std::vector<PlanarPrimitive>& observed, std::size_t min_po
   return result;
 }
 
+// Keeps the points inside the box; returns how many went.
 std::size_t keepInside(const SeenBox& seen, pcl::PointCloud<pcl::PointNormal>& points) {
   const std::size_t before = points.size();
   std::size_t kept = 0;
@@ -255,6 +256,11 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     throw InvalidInputError(
         "fuseWithObserved: max_angle_degrees, max_distance, align_unseen_degrees, fill_spacing and "
         "fill_empty_radius must be finite and >= 0, clip_margin >= 0 (infinity = off)");
+  // Six faces of (1/spacing)^2 grid points each: below 0.001 that is millions of points.
+  if (options.fill_spacing > 0.0 && options.fill_spacing < kMinFillSpacing)
+    throw InvalidInputError("fuseWithObserved: fill_spacing must be 0 (off) or at least " +
+                            std::to_string(kMinFillSpacing) + " of the diagonal, got " +
+                            std::to_string(options.fill_spacing));
   ObservedFusionReport counts;
   const double max_angle = options.max_angle_degrees * kPi / 180.0;
   const double max_distance = options.max_distance * diagonalOf(observed);

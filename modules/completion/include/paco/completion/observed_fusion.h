@@ -17,6 +17,9 @@
 
 namespace paco {
 
+/// The finest box-fill grid fuseWithObserved accepts (ObservedFusionOptions::fill_spacing).
+constexpr double kMinFillSpacing = 0.001;
+
 struct ObservedFusionOptions {
   /// A completed primitive may take an observed segment's plane when their normals are within
   /// this angle (unoriented, degrees)...
@@ -39,9 +42,10 @@ struct ObservedFusionOptions {
   /// error; a margin lets a part extend beyond what was seen.
   double clip_margin = std::numeric_limits<double>::infinity();
   /// Covers the faces of the observed points' box (on the dominant seen axes) with a grid of
-  /// points of this spacing (fraction of the box diagonal; 0 = off), keeping those farther
-  /// than `fill_empty_radius` from every fused point. Each face's points join a fused
-  /// primitive on (nearly) the face's plane, or become a new primitive (confidence 0.99).
+  /// points of this spacing (fraction of the box diagonal, at least kMinFillSpacing; 0 = off),
+  /// keeping those farther than `fill_empty_radius` from every fused point. Each face's points
+  /// join a fused primitive on (nearly) the face's plane, or become a new primitive (confidence
+  /// 0.99).
   /// PolyFit closes an under-supported hidden side with too small a solid (median volume 0.51
   /// of the part's at 75 % missing); most scans of a part span its extent, and the box faces
   /// give that side an outer hull where the network put nothing (doc/results.md).
