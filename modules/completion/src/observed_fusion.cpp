@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 namespace paco {
 namespace {
@@ -49,17 +50,30 @@ double diagonalOf(const std::vector<PlanarPrimitive>& primitives) {
   return box.isEmpty() ? 0.0 : box.diagonal().norm();
 }
 
-// The seen directions: every trusted observed segment's normal and the dominant axes.
-std::vector<Eigen::Vector3d> seenDirections(const std::vector<PlanarPrimitive>& observed, std::size_t min_points) {
-  std::vector<Eigen::Vector3d> directions;
+// The unit normals of the trusted observed segments (at least min_points points) and their
+// sizes, and the dominant axes they imply.
+struct SeenNormals {
+  std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
-  for (const auto& seen : observed) {
-    if (seen.points.size() < min_points || !(seen.plane.normal.norm() > 0.0)) continue;
-    directions.push_back(seen.plane.normal.normalized());
-    sizes.push_back(static_cast<double>(seen.points.size()));
+  std::optional<Eigen::Matrix3d> axes;
+};
+
+SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_t min_points) {
+  SeenNormals seen;
+  for (const auto& segment : observed) {
+    if (segment.points.size() < min_points || !(segment.plane.normal.norm() > 0.0)) continue;
+    seen.normals.push_back(segment.plane.normal.normalized());
+    seen.sizes.push_back(static_cast<double>(segment.points.size()));
   }
-  if (const auto axes = dominantPlaneAxes(directions, sizes))
-    for (int k = 0; k < 3; ++k) directions.push_back(axes->col(k));
+  seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
+  return seen;
+}
+
+// The seen directions: every trusted observed segment's normal and the dominant axes.
+std::vector<Eigen::Vector3d> seenDirections(const SeenNormals& seen) {
+  std::vector<Eigen::Vector3d> directions = seen.normals;
+  if (seen.axes)
+    for (int k = 0; k < 3; ++k) directions.push_back(seen.axes->col(k));
   return directions;
 }
 
@@ -96,25 +110,22 @@ struct SeenBox {
   bool contains(const pcl::PointNormal& p) const { return box.contains(axes.transpose() * position(p)); }
 };
 
-// Grown by `margin` times its diagonal on every side.
-SeenBox seenBox(const std::vector<PlanarPrimitive>& observed, std::size_t min_points, double margin) {
-  std::vector<Eigen::Vector3d> normals;
-  std::vector<double> sizes;
-  for (const auto& seen : observed) {
-    if (seen.points.size() < min_points || !(seen.plane.normal.norm() > 0.0)) continue;
-    normals.push_back(seen.plane.normal);
-    sizes.push_back(static_cast<double>(seen.points.size()));
-  }
+SeenBox seenBox(const std::vector<PlanarPrimitive>& observed, const SeenNormals& seen) {
   SeenBox result;
-  if (const auto axes = dominantPlaneAxes(normals, sizes)) result.axes = *axes;
-  for (const auto& seen : observed)
-    for (const auto& p : seen.points) result.box.extend(result.axes.transpose() * position(p));
-  if (!result.box.isEmpty()) {
-    const Eigen::Vector3d grow = Eigen::Vector3d::Constant(margin * result.box.diagonal().norm());
-    result.box.min() -= grow;
-    result.box.max() += grow;
-  }
+  if (seen.axes) result.axes = *seen.axes;
+  for (const auto& segment : observed)
+    for (const auto& p : segment.points) result.box.extend(result.axes.transpose() * position(p));
   return result;
+}
+
+// The same box grown by `margin` times its diagonal on every side.
+SeenBox grown(SeenBox seen, double margin) {
+  if (!seen.box.isEmpty()) {
+    const Eigen::Vector3d grow = Eigen::Vector3d::Constant(margin * seen.box.diagonal().norm());
+    seen.box.min() -= grow;
+    seen.box.max() += grow;
+  }
+  return seen;
 }
 
 // Keeps the points inside the box; returns how many went.
@@ -322,16 +333,18 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       ++counts.absorbed;
     }
   }
+  const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points);
   if (options.align_unseen_degrees > 0.0) {
-    const auto directions = seenDirections(observed, options.min_observed_points);
+    const auto directions = seenDirections(seen_normals);
     const double max_align = options.align_unseen_degrees * kPi / 180.0;
     for (std::size_t c = 0; c < completed.size(); ++c)
       if (!snapped[c] && !absorbed[c] && alignWithNearest(completed[c], directions, max_align)) ++counts.aligned;
   }
+  const SeenBox seen_box = seenBox(observed, seen_normals);
   std::vector<bool> clipped(completed.size(), false);
   if (std::isfinite(options.clip_margin) && !observed.empty()) {
     // Observed points lie inside by construction: only predicted ones go.
-    const SeenBox box = seenBox(observed, options.min_observed_points, options.clip_margin);
+    const SeenBox box = grown(seen_box, options.clip_margin);
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (absorbed[c]) continue;
       const std::size_t before = completed[c].points.size();
@@ -349,7 +362,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     if (!absorbed[c] && !clipped[c]) fused.push_back(std::move(completed[c]));
   for (auto& primitive : unmatched) fused.push_back(std::move(primitive));
   if (options.fill_spacing > 0.0 && !observed.empty())
-    fillSeenBox(seenBox(observed, options.min_observed_points, 0.0), options, fused, counts);
+    fillSeenBox(seen_box, options, fused, counts);
   if (report) *report = counts;
   return fused;
 }
