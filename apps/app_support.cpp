@@ -62,7 +62,9 @@ void FusionFlags::addTo(boost::program_options::options_description& options) {
       ("clip-margin", po::value(&clip_margin)->default_value(clip_margin),
        "with fusion: drop completed points beyond the box of the seen points plus this fraction of its diagonal (off: keep all)")
       ("fill-box", po::value(&fill_box_spacing)->default_value(fill_box_spacing),
-       "with fusion: cover the uncovered faces of the box of the seen points with points this far apart (fraction of its diagonal; 0: off)");
+       "with fusion: cover the uncovered faces of the box of the seen points with points this far apart (fraction of its diagonal; 0: off)")
+      ("unseen-points", po::value(&unseen_point_fraction)->default_value(unseen_point_fraction),
+       "with fusion: the fraction of the network's points that unseen primitives keep, in (0, 1] (1: all)");
 }
 
 void FusionFlags::validate() const {
@@ -72,6 +74,9 @@ void FusionFlags::validate() const {
   if (!(fill_box_spacing == 0.0 || (fill_box_spacing >= 0.001 && fill_box_spacing < 1.0)))
     throw UsageError("--fill-box must be 0 (off) or in [0.001, 1) (a fraction of the diagonal), got " +
                      std::to_string(fill_box_spacing));
+  if (!(unseen_point_fraction > 0.0 && unseen_point_fraction <= 1.0))
+    throw UsageError("--unseen-points must be in (0, 1] (a fraction of the points), got " +
+                     std::to_string(unseen_point_fraction));
   parseNonNegativeOrOff("--clip-margin", clip_margin);
 }
 

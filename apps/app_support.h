@@ -36,8 +36,9 @@ struct FusionFlags {
   double align_unseen_degrees = 0.0;
   std::string clip_margin = "off";
   double fill_box_spacing = 0.02;
+  double unseen_point_fraction = 0.25;
 
-  /// Adds --align-unseen, --clip-margin and --fill-box, bound to the fields above.
+  /// Adds --align-unseen, --clip-margin, --fill-box and --unseen-points, bound to the fields above.
   void addTo(boost::program_options::options_description& options);
   /// Throws UsageError when a value is out of range.
   void validate() const;

@@ -32,6 +32,7 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
   options.align_unseen_degrees = flags.align_unseen_degrees;
   options.clip_margin = flags.clipMargin();
   options.fill_spacing = flags.fill_box_spacing;
+  options.unseen_point_fraction = flags.unseen_point_fraction;
   primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), options, &report);
   timer.stop();
   std::printf("fuse with the seen faces: %s\n", describe(report).c_str());

@@ -165,6 +165,7 @@ int dataset(const Options& o) {
   b.method.align_unseen_degrees = o.fusion.align_unseen_degrees;
   b.method.clip_margin = o.fusion.clipMargin();
   b.method.fill_box_spacing = o.fusion.fill_box_spacing;
+  b.method.unseen_point_fraction = o.fusion.unseen_point_fraction;
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
   b.metrics.num_samples = o.samples;

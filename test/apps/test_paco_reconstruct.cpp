@@ -167,9 +167,12 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--clip-margin must be a number >= 0 or 'off', got 'near'"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --fill-box -0.1", &log), 2) << log;
   EXPECT_NE(log.find("--fill-box must be 0 (off) or in [0.001, 1)"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --unseen-points 0", &log), 2) << log;
+  EXPECT_NE(log.find("--unseen-points must be in (0, 1]"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
   EXPECT_NE(log.find("--fill-box"), std::string::npos);
+  EXPECT_NE(log.find("--unseen-points"), std::string::npos);
 }
 
 TEST(PacoReconstruct, UnknownBackendNamesAreRejectedBeforeAnyWork) {

@@ -29,10 +29,12 @@ PlanarPrimitive patch(const Plane& plane, const Eigen::Vector3d& centre, double 
   return primitive;
 }
 
-// Fusion alone, without the box fill (which these tests of matching would otherwise see).
+// Fusion alone, without the box fill and the thinning of unseen primitives (which these tests
+// of matching would otherwise see).
 ObservedFusionOptions fusionOnly() {
   ObservedFusionOptions options;
   options.fill_spacing = 0.0;
+  options.unseen_point_fraction = 1.0;
   return options;
 }
 
@@ -240,6 +242,7 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   EXPECT_EQ(ObservedFusionOptions{}.fill_spacing, 0.02);  // on by default
 
   ObservedFusionOptions options;
+  options.unseen_point_fraction = 1.0;  // the predicted top keeps all its points
   options.fill_spacing = 0.05;       // 0.08 apart
   options.fill_empty_radius = 0.05;  // nothing within 0.08
   const auto fused = fuseWithObserved(completed, observed, options, &report);
@@ -269,6 +272,52 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   EXPECT_EQ(report.filled_points, new_points + (fused[1].points.size() - 100u) + (fused[2].points.size() - 64u));
   for (double bad : {-0.1, 1e-5}) {  // negative; so fine the grid would hold billions of points
     options.fill_spacing = bad;
+    EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+  }
+}
+
+TEST(ObservedFusion, UnseenPredictionsKeepAFractionOfTheirPointsSeenFacesKeepAll) {
+  // Seen and predicted: the top z = 1. Predicted only: the sides x = 1 (256 points, as many as
+  // the shipped model gives a primitive) and y = 1 (64 points).
+  const Plane top = Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1});
+  const Plane side = Plane::fromPointAndNormal({1, 0, 0}, {1, 0, 0});
+  const Plane back = Plane::fromPointAndNormal({0, 1, 0}, {0, 1, 0});
+  const std::vector<PlanarPrimitive> observed = {patch(top, {0.5, 0.5, 1}, 1.0, 10, 1.0f)};
+  const std::vector<PlanarPrimitive> completed = {patch(top, {0.5, 0.5, 1}, 1.0, 8, 0.9f),
+                                                  patch(side, {1, 0.5, 0.5}, 1.0, 16, 0.85f),
+                                                  patch(back, {0.5, 1, 0.5}, 1.0, 8, 0.85f)};
+  EXPECT_EQ(ObservedFusionOptions{}.unseen_point_fraction, 0.25);  // on by default
+  ObservedFusionOptions options = fusionOnly();
+  options.unseen_point_fraction = 0.25;
+  ASSERT_EQ(options.unseen_min_points, 32u);
+  ObservedFusionReport report;
+  auto fused = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(fused.size(), 3u);
+  EXPECT_EQ(fused[0].points.size(), 64u + 100u);  // a seen face keeps every predicted point
+  EXPECT_EQ(fused[1].points.size(), 64u);         // one in four, evenly spaced
+  EXPECT_EQ(fused[2].points.size(), 32u);         // one in two: not below the minimum
+  EXPECT_EQ(report.thinned_points, 192u + 32u);
+  EXPECT_NE(describe(report).find("224 points of unseen primitives thinned out"), std::string::npos)
+      << describe(report);
+  EXPECT_LT(maxDistanceToPlane(fused[1], side), 1e-6);
+  // Evenly spaced: kept point k is the 4k-th, not one of the first 64.
+  const auto& original = completed[1].points;
+  for (std::size_t k = 0; k < fused[1].points.size(); ++k) {
+    EXPECT_EQ(fused[1].points[k].y, original[4 * k].y);
+    EXPECT_EQ(fused[1].points[k].z, original[4 * k].z);
+  }
+
+  options.unseen_point_fraction = 0.3;  // 1 + floor(255 * 0.3)
+  EXPECT_EQ(fuseWithObserved(completed, observed, options, &report)[1].points.size(), 77u);
+  options.unseen_min_points = 100;  // at least 100 of 256; all 64 of the smaller one
+  fused = fuseWithObserved(completed, observed, options, &report);
+  EXPECT_EQ(fused[1].points.size(), 100u);
+  EXPECT_EQ(fused[2].points.size(), 64u);
+  options.unseen_point_fraction = 1.0;
+  EXPECT_EQ(fuseWithObserved(completed, observed, options, &report)[1].points.size(), 256u);
+  EXPECT_EQ(report.thinned_points, 0u);
+  for (double bad : {0.0, -0.25, 1.5, std::nan("")}) {
+    options.unseen_point_fraction = bad;
     EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
   }
 }

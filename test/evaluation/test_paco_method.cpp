@@ -11,6 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <string>
+
 namespace ev = paco::evaluation;
 
 namespace {
@@ -88,11 +91,18 @@ TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
     EXPECT_TRUE(found) << "no plane through " << point.transpose() << " with normal " << normal.transpose();
   }
   // The open top is the one face of the seen box that nothing covers: the box fill (on by
-  // default) closes it with a plane at the top of the seen sides, z = 0.2.
+  // default) closes it at the top of the seen sides, z = 0.2, with a plane of its own or by
+  // joining a prediction within the fusion's tolerances (10 degrees, 2 % of the seen diagonal,
+  // 0.88); the untrained network's planes differ from run to run with LibTorch's threads.
   bool top = false;
-  for (const paco::Plane& plane : out.planes)
-    top = top || (std::abs(plane.normal.z()) > 1.0 - 1e-6 && std::abs(plane.signedDistance({0, 0, 0.2})) < 0.01);
-  EXPECT_TRUE(top);
+  std::string horizontal;
+  for (const paco::Plane& plane : out.planes) {
+    top = top || (std::abs(plane.normal.z()) > std::cos(10.0 * 3.14159265358979 / 180.0) &&
+                  std::abs(plane.signedDistance({0, 0, 0.2})) < 0.02 * 0.88);
+    if (std::abs(plane.normal.z()) > 0.9)
+      horizontal += " (n.z " + std::to_string(plane.normal.z()) + ", at " + std::to_string(plane.signedDistance({0, 0, 0.2})) + ")";
+  }
+  EXPECT_TRUE(top) << "horizontal planes:" << horizontal;
 }
 
 TEST(PacoMethod, BadFrameAndMissingModelAreFailuresThatSayWhy) {

@@ -159,6 +159,20 @@ std::vector<double> nearestDistances(const std::vector<Eigen::Vector3d>& queries
   return distances;
 }
 
+// Keeps 1 + floor((n - 1) * fraction) of the n points, evenly spaced from the first, but at least
+// min_points (all when n is smaller); returns how many went.
+std::size_t thinOut(pcl::PointCloud<pcl::PointNormal>& points, double fraction, std::size_t min_points) {
+  const std::size_t before = points.size();
+  if (before <= min_points) return 0;
+  fraction = std::max(fraction, static_cast<double>(min_points) / static_cast<double>(before));
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < before; ++i)
+    if (i == 0 || std::floor(static_cast<double>(i) * fraction) > std::floor(static_cast<double>(i - 1) * fraction))
+      points[kept++] = points[i];
+  points.resize(kept);
+  return before - kept;
+}
+
 // Adds grid points on the faces of the seen box where no fused point is near (see
 // ObservedFusionOptions::fill_spacing).
 void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std::vector<PlanarPrimitive>& fused,
@@ -253,7 +267,9 @@ std::string describe(const ObservedFusionReport& report) {
                                 : "") +
          (report.filled_points ? ", " + std::to_string(report.filled_points) + " points filled on the seen box (" +
                                      std::to_string(report.filled_faces) + " new box faces)"
-                               : "");
+                               : "") +
+         (report.thinned_points ? ", " + std::to_string(report.thinned_points) + " points of unseen primitives thinned out"
+                                : "");
 }
 
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
@@ -263,10 +279,12 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       !std::isfinite(options.max_distance) || options.max_distance < 0.0 ||
       !std::isfinite(options.align_unseen_degrees) || options.align_unseen_degrees < 0.0 ||
       std::isnan(options.clip_margin) || options.clip_margin < 0.0 || !std::isfinite(options.fill_spacing) ||
-      options.fill_spacing < 0.0 || !std::isfinite(options.fill_empty_radius) || options.fill_empty_radius < 0.0)
+      options.fill_spacing < 0.0 || !std::isfinite(options.fill_empty_radius) || options.fill_empty_radius < 0.0 ||
+      !(options.unseen_point_fraction > 0.0 && options.unseen_point_fraction <= 1.0))
     throw InvalidInputError(
         "fuseWithObserved: max_angle_degrees, max_distance, align_unseen_degrees, fill_spacing and "
-        "fill_empty_radius must be finite and >= 0, clip_margin >= 0 (infinity = off)");
+        "fill_empty_radius must be finite and >= 0, clip_margin >= 0 (infinity = off), "
+        "unseen_point_fraction in (0, 1]");
   // Six faces of (1/spacing)^2 grid points each: below 0.001 that is millions of points.
   if (options.fill_spacing > 0.0 && options.fill_spacing < kMinFillSpacing)
     throw InvalidInputError("fuseWithObserved: fill_spacing must be 0 (off) or at least " +
@@ -358,8 +376,11 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   }
   std::vector<PlanarPrimitive> fused;
   fused.reserve(completed.size() + unmatched.size());
-  for (std::size_t c = 0; c < completed.size(); ++c)
-    if (!absorbed[c] && !clipped[c]) fused.push_back(std::move(completed[c]));
+  for (std::size_t c = 0; c < completed.size(); ++c) {
+    if (absorbed[c] || clipped[c]) continue;
+    if (!snapped[c]) counts.thinned_points += thinOut(completed[c].points, options.unseen_point_fraction, options.unseen_min_points);
+    fused.push_back(std::move(completed[c]));
+  }
   for (auto& primitive : unmatched) fused.push_back(std::move(primitive));
   if (options.fill_spacing > 0.0 && !observed.empty())
     fillSeenBox(seen_box, options, fused, counts);

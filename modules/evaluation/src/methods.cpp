@@ -245,6 +245,7 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     fusion.align_unseen_degrees = options.align_unseen_degrees;
     fusion.clip_margin = options.clip_margin;
     fusion.fill_spacing = options.fill_box_spacing;
+    fusion.unseen_point_fraction = options.unseen_point_fraction;
     primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation), fusion);
     out.seconds["fuse"] = secondsSince(fuse_start);
   }

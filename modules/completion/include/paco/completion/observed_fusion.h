@@ -51,6 +51,15 @@ struct ObservedFusionOptions {
   /// give that side an outer hull where the network put nothing (doc/results.md).
   double fill_spacing = 0.02;
   double fill_empty_radius = 0.05;
+  /// Unseen completed primitives keep this fraction of their points, evenly spaced (in (0, 1];
+  /// 1 = all), but at least `unseen_min_points` (all when they have fewer). PolyFit weighs every point alike, and the network's points of an unseen face
+  /// are a guess: at full weight its planes, often 20-40 degrees off the part's faces, carve
+  /// the hidden side. Fewer keep them as candidates that close the solid where nothing else
+  /// does, while seen faces and the box fill carry the hull (doc/results.md). Applied before
+  /// the box fill, which then covers what the thinned primitives no longer reach.
+  double unseen_point_fraction = 0.25;
+  /// The assemblers drop a primitive with fewer than 10 points: thinning must not.
+  std::size_t unseen_min_points = 32;
 };
 
 struct ObservedFusionReport {
@@ -64,6 +73,7 @@ struct ObservedFusionReport {
   std::size_t clipped = 0;         ///< unseen completed primitives dropped by the clip
   std::size_t filled_points = 0;   ///< box-face points added where nothing covered the box
   std::size_t filled_faces = 0;    ///< box faces added as new primitives (the rest joined one)
+  std::size_t thinned_points = 0;  ///< points of unseen completed primitives left out (unseen_point_fraction)
 };
 
 /// One line for logs: "N primitives took a seen plane, N duplicates absorbed, N seen faces added"
@@ -79,9 +89,10 @@ std::string describe(const ObservedFusionReport& report);
 /// primitives within the tolerances of the same observed segment are duplicates: their points
 /// are projected onto the chosen one and they are removed. Unmatched observed segments are
 /// appended with confidence 1; unmatched completed primitives are kept, turned parallel to a seen
-/// direction when `align_unseen_degrees` allows, then clipped to the observed box when
-/// `clip_margin` is finite; then the box faces are filled when `fill_spacing` > 0. Throws InvalidInputError on tolerances that are negative or not
-/// finite (the margin may be infinite).
+/// direction when `align_unseen_degrees` allows, clipped to the observed box when `clip_margin`
+/// is finite, and thinned to `unseen_point_fraction` of their points; then the box faces are
+/// filled when `fill_spacing` > 0. Throws InvalidInputError on tolerances that are negative or
+/// not finite (the margin may be infinite) and on a fraction outside (0, 1].
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
                                               const std::vector<PlanarPrimitive>& observed,
                                               const ObservedFusionOptions& options = {},

@@ -69,6 +69,8 @@ struct MethodOptions {
   double clip_margin = std::numeric_limits<double>::infinity();
   /// paco, with fusion: paco::ObservedFusionOptions::fill_spacing (0 = off).
   double fill_box_spacing = 0.02;
+  /// paco, with fusion: paco::ObservedFusionOptions::unseen_point_fraction (1 = all).
+  double unseen_point_fraction = 0.25;
   /// paco: LibTorch threads (process-wide, set when the model is first loaded; default 1, since
   /// the evaluation runs samples in parallel with --jobs).
   int completion_threads = 1;
