@@ -37,7 +37,7 @@ struct Options {
   bool no_completion = false;
   std::string segmenter = "gocopp";
   std::string model;
-  double threshold = 0.8;
+  double threshold = 0.7;
   bool no_fusion = false;
   paco::app::FusionFlags fusion;
   std::string assembler = "polyfit";

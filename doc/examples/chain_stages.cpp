@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
 
       paco::ParametricCompleter completer;
       completer.setModel(model);
-      completer.setConfidenceThreshold(0.8);
+      completer.setConfidenceThreshold(0.7);
       completer.setInputProxies(proxies);
       completer.complete(primitives);  // in the input's own frame and units
       // Seen faces keep their fitted planes and points; the network supplies the unseen ones.

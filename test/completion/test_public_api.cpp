@@ -228,7 +228,7 @@ TEST_F(PublicApi, ThresholdKeepsOnlyConfidentPrimitivesSorted) {
       EXPECT_LE(confident[i].confidence, confident[i - 1].confidence);
     }
   }
-  EXPECT_DOUBLE_EQ(ParametricCompleter().getConfidenceThreshold(), 0.8);
+  EXPECT_DOUBLE_EQ(ParametricCompleter().getConfidenceThreshold(), 0.7);
 }
 
 TEST_F(PublicApi, EncoderValidatesItsInput) {

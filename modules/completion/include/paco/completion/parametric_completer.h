@@ -24,8 +24,10 @@ class ParametricCompleter {
   /// Must be the model that produced the proxies.
   void setModel(const CompletionModel::ConstPtr& model) { model_ = model; }
   /// Keep primitives with confidence (sigmoid of the selector logit) above this, in [0, 1];
-  /// default 0.8: chosen for the shipped model on never-trained parts (models/README.md); the
-  /// paper uses 0.7, which keeps too many spurious planes for PolyFit with our model.
+  /// default 0.7, the paper's: chosen for the shipped model on never-trained parts, followed by
+  /// observed fusion (paco::fuseWithObserved), whose thinning of the unseen primitives' points
+  /// keeps PolyFit from following the extra guesses (doc/results.md). Without fusion, 0.8 keeps
+  /// fewer spurious planes.
   void setConfidenceThreshold(double threshold) { threshold_ = threshold; }
   double getConfidenceThreshold() const { return threshold_; }
 
@@ -40,7 +42,7 @@ class ParametricCompleter {
 
   PlaneProxies proxies_;
   CompletionModel::ConstPtr model_;
-  double threshold_ = 0.8;
+  double threshold_ = 0.7;
 };
 
 }  // namespace paco

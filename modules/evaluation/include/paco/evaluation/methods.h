@@ -57,9 +57,9 @@ struct MethodOptions {
   /// paco_reconstruct does for a user's scan. "complete": the sample's frame, i.e. the complete
   /// shape's box (the paper's protocol, which tells the network where the unseen part ends).
   std::string completion_frame = "own";
-  /// paco: keep the completed primitives whose confidence is above this (default 0.8, as
-  /// paco::ParametricCompleter; the paper uses 0.7).
-  double confidence_threshold = 0.8;
+  /// paco: keep the completed primitives whose confidence is above this (default 0.7, as
+  /// paco::ParametricCompleter and the paper).
+  double confidence_threshold = 0.7;
   /// paco: fuse the completed primitives with the observed segments (paco::fuseWithObserved):
   /// seen faces keep their fitted planes and points, the network supplies the unseen ones.
   bool fuse_observed = true;
