@@ -93,14 +93,16 @@ TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
   // The open top is the one face of the seen box that nothing covers: the box fill (on by
   // default) closes it at the top of the seen sides, z = 0.2, with a plane of its own or by
   // joining a prediction within the fusion's tolerances (10 degrees, 2 % of the seen diagonal,
-  // 0.88); the untrained network's planes differ from run to run with LibTorch's threads.
+  // 0.88): the untrained network's output is not the same in every run (in 1 of 15 runs a
+  // prediction 8 degrees off and 0.005 away took the top's points).
   bool top = false;
   std::string horizontal;
   for (const paco::Plane& plane : out.planes) {
     top = top || (std::abs(plane.normal.z()) > std::cos(10.0 * 3.14159265358979 / 180.0) &&
                   std::abs(plane.signedDistance({0, 0, 0.2})) < 0.02 * 0.88);
     if (std::abs(plane.normal.z()) > 0.9)
-      horizontal += " (n.z " + std::to_string(plane.normal.z()) + ", at " + std::to_string(plane.signedDistance({0, 0, 0.2})) + ")";
+      horizontal += " (n.z " + std::to_string(plane.normal.z()) + ", at " +
+                    std::to_string(plane.signedDistance({0, 0, 0.2})) + ")";
   }
   EXPECT_TRUE(top) << "horizontal planes:" << horizontal;
 }

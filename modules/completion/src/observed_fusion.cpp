@@ -268,8 +268,9 @@ std::string describe(const ObservedFusionReport& report) {
          (report.filled_points ? ", " + std::to_string(report.filled_points) + " points filled on the seen box (" +
                                      std::to_string(report.filled_faces) + " new box faces)"
                                : "") +
-         (report.thinned_points ? ", " + std::to_string(report.thinned_points) + " points of unseen primitives thinned out"
-                                : "");
+         (report.thinned_points
+              ? ", " + std::to_string(report.thinned_points) + " points of unseen primitives thinned out"
+              : "");
 }
 
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
@@ -378,7 +379,8 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   fused.reserve(completed.size() + unmatched.size());
   for (std::size_t c = 0; c < completed.size(); ++c) {
     if (absorbed[c] || clipped[c]) continue;
-    if (!snapped[c]) counts.thinned_points += thinOut(completed[c].points, options.unseen_point_fraction, options.unseen_min_points);
+    if (!snapped[c])
+      counts.thinned_points += thinOut(completed[c].points, options.unseen_point_fraction, options.unseen_min_points);
     fused.push_back(std::move(completed[c]));
   }
   for (auto& primitive : unmatched) fused.push_back(std::move(primitive));

@@ -52,11 +52,12 @@ struct ObservedFusionOptions {
   double fill_spacing = 0.02;
   double fill_empty_radius = 0.05;
   /// Unseen completed primitives keep this fraction of their points, evenly spaced (in (0, 1];
-  /// 1 = all), but at least `unseen_min_points` (all when they have fewer). PolyFit weighs every point alike, and the network's points of an unseen face
-  /// are a guess: at full weight its planes, often 20-40 degrees off the part's faces, carve
-  /// the hidden side. Fewer keep them as candidates that close the solid where nothing else
-  /// does, while seen faces and the box fill carry the hull (doc/results.md). Applied before
-  /// the box fill, which then covers what the thinned primitives no longer reach.
+  /// 1 = all), but at least `unseen_min_points` (all when they have fewer). PolyFit weighs
+  /// every point alike, and the network's points of an unseen face are a guess: at full weight
+  /// its planes, often 20-40 degrees off the part's faces, carve the hidden side. Thinned, they
+  /// stay candidates that close the solid where nothing else does, while seen faces and the box
+  /// fill carry the hull (doc/results.md). Applied before the box fill, which sees only the
+  /// points kept.
   double unseen_point_fraction = 0.25;
   /// The assemblers drop a primitive with fewer than 10 points: thinning must not.
   std::size_t unseen_min_points = 32;
