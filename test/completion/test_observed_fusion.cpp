@@ -38,6 +38,13 @@ ObservedFusionOptions fusionOnly() {
   return options;
 }
 
+// Seen: the bottom z = 0 (a 10 x 10 grid, x and y in 0.05..0.95) and the side x = 0 (8 x 8, y
+// and z in 0.0625..0.9375).
+std::vector<PlanarPrimitive> seenBottomAndSide() {
+  return {patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 10, 1.0f),
+          patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
+}
+
 double maxDistanceToPlane(const PlanarPrimitive& primitive, const Plane& plane) {
   double largest = 0.0;
   for (const auto& p : primitive.points) largest = std::max(largest, std::abs(plane.signedDistance({p.x, p.y, p.z})));
@@ -159,9 +166,7 @@ TEST(ObservedFusion, UnseenPlanesNearASeenDirectionAreTurnedParallelToIt) {
   // the seen bottom's direction, the far side y = 1, 6° off the third dominant axis (no seen
   // face has it), and a 45° chamfer that matches no seen direction.
   const double deg = 3.14159265358979 / 180.0;
-  const std::vector<PlanarPrimitive> observed = {
-      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 10, 1.0f),
-      patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
+  const std::vector<PlanarPrimitive> observed = seenBottomAndSide();
   std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0.5, 0.5, 1.0}, {std::sin(4 * deg), 0, std::cos(4 * deg)}), {0.5, 0.5, 1}, 1.0, 6, 0.9f),
       patch(Plane::fromPointAndNormal({0.5, 1.0, 0.5}, {0, std::cos(6 * deg), std::sin(6 * deg)}), {0.5, 1, 0.5}, 1.0, 6, 0.9f),
@@ -194,9 +199,7 @@ TEST(ObservedFusion, PredictionsFarOutsideTheSeenBoxAreClipped) {
   // Seen: the bottom z = 0 (x, y in 0.05..0.95) and the side x = 0 (y, z in 0.0625..0.9375).
   // Their box, grown by 0.1 of its diagonal (1.61): x in [-0.16, 1.11], y in [-0.11, 1.11],
   // z in [-0.16, 1.10].
-  const std::vector<PlanarPrimitive> observed = {
-      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 10, 1.0f),
-      patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
+  const std::vector<PlanarPrimitive> observed = seenBottomAndSide();
   // Predicted: the seen bottom, too wide (a 10 x 10 grid at -0.4, -0.2, ..., 1.4: 6 x 6 inside);
   // the unseen top, a little too wide (14 x 14 at -0.15, -0.05, ..., 1.15: 13 x 12 inside); and
   // a face at x = 2.5, far outside.
@@ -231,9 +234,7 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   // Seen: the bottom z = 0 (x, y in 0.05..0.95) and the side x = 0 (y, z in 0.0625..0.9375); box
   // x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375], diagonal 1.61. Predicted: the top,
   // covering the box's top face. Left uncovered: the faces x = 0.95, y = 0.05 and y = 0.95.
-  const std::vector<PlanarPrimitive> observed = {
-      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 10, 1.0f),
-      patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
+  const std::vector<PlanarPrimitive> observed = seenBottomAndSide();
   const std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0, 0, 0.9375}, {0, 0, 1}), {0.5, 0.5, 0.9375}, 1.0, 10, 0.9f)};
   ObservedFusionReport report;

@@ -128,14 +128,20 @@ SeenBox grown(SeenBox seen, double margin) {
   return seen;
 }
 
-// Keeps the points inside the box; returns how many went.
-std::size_t keepInside(const SeenBox& seen, pcl::PointCloud<pcl::PointNormal>& points) {
+// Keeps, in order, the points whose index `keep` accepts; returns how many went.
+template <typename Keep>
+std::size_t keepWhere(pcl::PointCloud<pcl::PointNormal>& points, Keep keep) {
   const std::size_t before = points.size();
   std::size_t kept = 0;
   for (std::size_t i = 0; i < before; ++i)
-    if (seen.contains(points[i])) points[kept++] = points[i];
+    if (keep(i)) points[kept++] = points[i];
   points.resize(kept);
   return before - kept;
+}
+
+// Keeps the points inside the box; returns how many went.
+std::size_t keepInside(const SeenBox& seen, pcl::PointCloud<pcl::PointNormal>& points) {
+  return keepWhere(points, [&](std::size_t i) { return seen.contains(points[i]); });
 }
 
 // Distance of each query point to its nearest point of the clouds (infinity when they are empty).
@@ -165,12 +171,9 @@ std::size_t thinOut(pcl::PointCloud<pcl::PointNormal>& points, double fraction, 
   const std::size_t before = points.size();
   if (before <= min_points) return 0;
   fraction = std::max(fraction, static_cast<double>(min_points) / static_cast<double>(before));
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < before; ++i)
-    if (i == 0 || std::floor(static_cast<double>(i) * fraction) > std::floor(static_cast<double>(i - 1) * fraction))
-      points[kept++] = points[i];
-  points.resize(kept);
-  return before - kept;
+  return keepWhere(points, [fraction](std::size_t i) {
+    return i == 0 || std::floor(static_cast<double>(i) * fraction) > std::floor(static_cast<double>(i - 1) * fraction);
+  });
 }
 
 // Adds grid points on the faces of the seen box where no fused point is near (see
