@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 namespace paco::app {
@@ -54,16 +55,29 @@ double parseNonNegativeOrOff(const std::string& option, const std::string& text)
   return value;
 }
 
+std::string shortNumber(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+FusionFlags::FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing,
+                         double unseen_point_fraction)
+    : align_unseen_degrees(align_unseen_degrees),
+      clip_margin(std::isinf(clip_margin) ? "off" : shortNumber(clip_margin)),
+      fill_box_spacing(fill_box_spacing),
+      unseen_point_fraction(unseen_point_fraction) {}
+
 void FusionFlags::addTo(boost::program_options::options_description& options) {
   namespace po = boost::program_options;
   options.add_options()
-      ("align-unseen", po::value(&align_unseen_degrees)->default_value(align_unseen_degrees),
+      ("align-unseen", po::value(&align_unseen_degrees)->default_value(align_unseen_degrees, shortNumber(align_unseen_degrees)),
        "with fusion: turn unseen primitives within this many degrees of a seen direction parallel to it (0: off)")
       ("clip-margin", po::value(&clip_margin)->default_value(clip_margin),
        "with fusion: drop completed points beyond the box of the seen points plus this fraction of its diagonal (off: keep all)")
-      ("fill-box", po::value(&fill_box_spacing)->default_value(fill_box_spacing),
+      ("fill-box", po::value(&fill_box_spacing)->default_value(fill_box_spacing, shortNumber(fill_box_spacing)),
        "with fusion: cover the uncovered faces of the box of the seen points with points this far apart (fraction of its diagonal; 0: off)")
-      ("unseen-points", po::value(&unseen_point_fraction)->default_value(unseen_point_fraction),
+      ("unseen-points", po::value(&unseen_point_fraction)->default_value(unseen_point_fraction, shortNumber(unseen_point_fraction)),
        "with fusion: the fraction of the network's points that unseen primitives keep, in (0, 1] (1: all)");
 }
 

@@ -30,13 +30,21 @@ boost::program_options::variables_map parseCommandLine(
 /// Anything else is a UsageError naming `option`.
 double parseNonNegativeOrOff(const std::string& option, const std::string& text);
 
+/// A number as --help shows a default: "0.7", not "0.69999999999999996".
+std::string shortNumber(double value);
+
 /// The observed-fusion options paco_reconstruct, paco_complete and paco_eval share, with the
-/// same names, defaults and checks (paco::ObservedFusionOptions has their meaning).
+/// same names and checks (paco::ObservedFusionOptions has their meaning). The defaults come from
+/// the library (paco::app::libraryFusionFlags() in fusion_step.h, or
+/// paco::evaluation::MethodOptions in paco_eval, which can be built without the completion
+/// module), so that they are written once.
 struct FusionFlags {
-  double align_unseen_degrees = 0.0;
-  std::string clip_margin = "off";
-  double fill_box_spacing = 0.02;
-  double unseen_point_fraction = 0.25;
+  FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing, double unseen_point_fraction);
+
+  double align_unseen_degrees;
+  std::string clip_margin;  ///< a number, or "off" (infinity)
+  double fill_box_spacing;
+  double unseen_point_fraction;
 
   /// Adds --align-unseen, --clip-margin, --fill-box and --unseen-points, bound to the fields above.
   void addTo(boost::program_options::options_description& options);

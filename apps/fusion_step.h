@@ -14,6 +14,13 @@
 
 namespace paco::app {
 
+/// The fusion flags with the library's defaults (paco::ObservedFusionOptions).
+inline FusionFlags libraryFusionFlags() {
+  const ObservedFusionOptions defaults;
+  return FusionFlags(defaults.align_unseen_degrees, defaults.clip_margin, defaults.fill_spacing,
+                     defaults.unseen_point_fraction);
+}
+
 /// "complete: N primitives with confidence > T", and how far the scan was turned for the network
 /// (models with input orientation "seen-planes"), so that a user sees what the model was given.
 inline void reportCompletion(std::size_t primitives, double threshold, const Normalization& frame) {

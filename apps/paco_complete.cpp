@@ -35,9 +35,9 @@ struct Options {
   std::string input, output, pcd, model;
   std::string segmenter = "gocopp";
   double epsilon = 0.004;
-  double threshold = 0.7;
+  double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
-  paco::app::FusionFlags fusion;
+  paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   int threads = 0;
   int points = 2048;
   bool use_labels = false;
@@ -69,7 +69,7 @@ int run(int argc, char** argv) {
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "gocopp, region-growing, ransac or efficient-ransac")
       ("epsilon,e", po::value(&o.epsilon)->default_value(o.epsilon, "0.004"), "segmentation inlier distance, fraction of the bounding-box diagonal")
       ("use-labels", po::bool_switch(&o.use_labels), "use the input file's labels as the segmentation (no segmenter)")
-      ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.7"), "keep primitives with confidence above this, in [0, 1]")
+      ("threshold", po::value(&o.threshold)->default_value(o.threshold, paco::app::shortNumber(o.threshold)), "keep primitives with confidence above this, in [0, 1]")
       ("no-fusion", po::bool_switch(&o.no_fusion),
        "write the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("points", po::value(&o.points)->default_value(o.points), "points fed to the network (the training size)")

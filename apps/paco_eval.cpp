@@ -40,8 +40,10 @@ struct Options {
   bool dataset_labels = false;
   bool quiet = false;
   std::string model, completion_frame = "own", observed_fusion = "on";
-  paco::app::FusionFlags fusion;
-  double threshold = 0.7;
+  // The paco method's defaults, as the library has them.
+  paco::app::FusionFlags fusion{ev::MethodOptions().align_unseen_degrees, ev::MethodOptions().clip_margin,
+                                ev::MethodOptions().fill_box_spacing, ev::MethodOptions().unseen_point_fraction};
+  double threshold = ev::MethodOptions().confidence_threshold;
   int threads = 1;
   bool no_normals = false;
 };
@@ -210,7 +212,7 @@ int run(int argc, char** argv) {
       ("model", po::value(&o.model), "paco: model file (default: the shipped model)")
       ("completion-frame", po::value(&o.completion_frame)->default_value(o.completion_frame),
        "paco: own (the input's own box, as for a user's scan) or complete (the complete shape's frame, the paper's protocol)")
-      ("threshold", po::value(&o.threshold)->default_value(o.threshold, "0.7"), "paco: keep completed primitives with confidence above this")
+      ("threshold", po::value(&o.threshold)->default_value(o.threshold, paco::app::shortNumber(o.threshold)), "paco: keep completed primitives with confidence above this")
       ("threads", po::value(&o.threads)->default_value(o.threads), "paco: LibTorch threads")
       ("observed-fusion", po::value(&o.observed_fusion)->default_value(o.observed_fusion),
        "paco: on (seen faces keep their fitted planes and points, the network adds the unseen) or off (the network's primitives alone, as the paper)")

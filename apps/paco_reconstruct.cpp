@@ -37,9 +37,9 @@ struct Options {
   bool no_completion = false;
   std::string segmenter = "gocopp";
   std::string model;
-  double threshold = 0.7;
+  double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
-  paco::app::FusionFlags fusion;
+  paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   std::string assembler = "polyfit";
   std::string solver = "cbc";
   double time_limit = 60.0;
@@ -77,7 +77,7 @@ int run(int argc, char** argv) {
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "gocopp, region-growing, ransac or efficient-ransac")
       ("model", po::value(&o.model), "model file (default: the shipped model, or $PACO_MODEL)")
       ("no-completion", po::bool_switch(&o.no_completion), "assemble the segments of the input as they are (the direct baseline)")
-      ("threshold", po::value(&o.threshold)->default_value(o.threshold), "keep completed primitives with confidence above this, in [0, 1]")
+      ("threshold", po::value(&o.threshold)->default_value(o.threshold, paco::app::shortNumber(o.threshold)), "keep completed primitives with confidence above this, in [0, 1]")
       ("no-fusion", po::bool_switch(&o.no_fusion),
        "use the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("assembler", po::value(&o.assembler)->default_value(o.assembler), "polyfit or cell-complex")

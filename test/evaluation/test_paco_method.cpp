@@ -3,6 +3,8 @@
 // failure accounting; the quality of a trained model is measured by paco_eval (doc/results.md).
 #include <paco/common/error.h>
 #include <paco/completion/checkpoint.h>
+#include <paco/completion/observed_fusion.h>
+#include <paco/completion/parametric_completer.h>
 #include <paco/evaluation/methods.h>
 
 #include <shapes.h>
@@ -119,4 +121,16 @@ TEST(PacoMethod, BadFrameAndMissingModelAreFailuresThatSayWhy) {
   out = ev::runMethod("paco", boxWithoutTop(), options);
   EXPECT_EQ(out.reason, ev::FailureReason::Threw);
   EXPECT_NE(out.message.find("missing.pt"), std::string::npos) << out.message;
+}
+
+// MethodOptions repeats the library's defaults because the evaluation module builds without the
+// completion module; paco_eval takes its defaults from MethodOptions. They must not drift apart.
+TEST(PacoMethod, DefaultsAreTheLibrarys) {
+  const ev::MethodOptions method;
+  const paco::ObservedFusionOptions fusion;
+  EXPECT_EQ(method.confidence_threshold, paco::ParametricCompleter().getConfidenceThreshold());
+  EXPECT_EQ(method.align_unseen_degrees, fusion.align_unseen_degrees);
+  EXPECT_EQ(method.clip_margin, fusion.clip_margin);
+  EXPECT_EQ(method.fill_box_spacing, fusion.fill_spacing);
+  EXPECT_EQ(method.unseen_point_fraction, fusion.unseen_point_fraction);
 }
