@@ -143,6 +143,24 @@ TEST(Orientation, LeavesAnAxisAlignedScanAsItIs) {
   EXPECT_THROW(paco::seenPlanesRotation(normals, {1, 2}), paco::InvalidInputError);
 }
 
+TEST(Orientation, AChamferLargerThanEveryFaceDoesNotSetTheAxes) {
+  // A box turned by R0 and seen with a 45-degree chamfer that is its largest seen plane: the
+  // box's three faces outweigh it and the face perpendicular to it (830 against 700), so they
+  // set the axes.
+  const Eigen::Matrix3d R0 = turn(17.0, Eigen::Vector3d(1, 2, -0.5));
+  const std::vector<Eigen::Vector3d> normals = {R0 * Eigen::Vector3d(0, -1, -1), R0 * Eigen::Vector3d(-1, 0, 0),
+                                                R0 * Eigen::Vector3d(0, -1, 0), R0 * Eigen::Vector3d(0, 0, -1)};
+  const auto axes = paco::dominantPlaneAxes(normals, {400, 300, 280, 250});
+  ASSERT_TRUE(axes.has_value());
+  EXPECT_NEAR(axes->determinant(), 1.0, 1e-9);
+  for (std::size_t k = 1; k < normals.size(); ++k)
+    EXPECT_NEAR((axes->transpose() * normals[k]).cwiseAbs().maxCoeff(), 1.0, 1e-9) << "face " << k;
+  // The chamfer and one face alone span one frame, the heavier plane (the chamfer) exactly on an axis.
+  const auto chamfer = paco::dominantPlaneAxes({normals[0], normals[1]}, {400, 300});
+  ASSERT_TRUE(chamfer.has_value());
+  EXPECT_NEAR((chamfer->transpose() * normals[0].normalized()).cwiseAbs().maxCoeff(), 1.0, 1e-9);
+}
+
 TEST(Orientation, OnePlaneIsTurnedOntoItsNearestAxis) {
   const Eigen::Matrix3d R0 = turn(15.0, Eigen::Vector3d(1, 0, 0));
   const Eigen::Vector3d normal = R0 * Eigen::Vector3d(0, 0, 1);

@@ -11,6 +11,19 @@
 
 namespace paco {
 
+namespace {
+
+// The frame with `first` exactly as its first axis and `second` made perpendicular to it.
+Eigen::Matrix3d frameOf(const Eigen::Vector3d& first, const Eigen::Vector3d& second) {
+  Eigen::Matrix3d axes;
+  axes.col(0) = first;
+  axes.col(1) = (second - second.dot(first) * first).normalized();
+  axes.col(2) = axes.col(0).cross(axes.col(1));
+  return axes;
+}
+
+}  // namespace
+
 std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector3d>& normals,
                                                  const std::vector<double>& weights, double tolerance_degrees) {
   if (normals.size() != weights.size())
@@ -22,24 +35,40 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
   if (order.empty()) return std::nullopt;
   // Stable: equal weights keep the given order, so the result is reproducible.
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
-  const Eigen::Vector3d first = normals[order[0]].normalized();
-  const double max_cosine = std::sin(tolerance_degrees * 3.14159265358979323846 / 180.0);
-  std::optional<Eigen::Vector3d> second;
-  for (std::size_t k = 1; k < order.size() && !second; ++k) {
-    const Eigen::Vector3d n = normals[order[k]].normalized();
-    if (std::abs(n.dot(first)) <= max_cosine) second = (n - n.dot(first) * first).normalized();
-  }
-  if (!second) {
-    Eigen::Index least = 0;
-    first.cwiseAbs().minCoeff(&least);
-    const Eigen::Vector3d axis = Eigen::Vector3d::Unit(least);
-    second = (axis - axis.dot(first) * first).normalized();
-  }
-  Eigen::Matrix3d axes;
-  axes.col(0) = first;
-  axes.col(1) = *second;
-  axes.col(2) = first.cross(*second);
-  return axes;
+  std::vector<Eigen::Vector3d> unit;
+  for (std::size_t i : order) unit.push_back(normals[i].normalized());
+  const double radians = tolerance_degrees * 3.14159265358979323846 / 180.0;
+  const double max_cosine = std::sin(radians), min_cosine = std::cos(radians);
+  const auto support = [&](const Eigen::Matrix3d& axes) {
+    double total = 0.0;
+    for (std::size_t k = 0; k < unit.size(); ++k)
+      if ((axes.transpose() * unit[k]).cwiseAbs().maxCoeff() >= min_cosine) total += weights[order[k]];
+    return total;
+  };
+  // Every pair of perpendicular planes spans a frame, the heavier plane's normal exactly on its
+  // axis; the frame that carries the most weight wins, the heavier pairs on ties. Taking the
+  // largest plane's frame instead fails on chamfered parts, where a chamfer can be the largest
+  // seen face although most of the part lies on the axes the chamfer cuts.
+  // Frames from the 64 largest planes only: the search grows with the cube of their number, and a
+  // real scan can have hundreds of small segments.
+  const std::size_t candidates = std::min<std::size_t>(unit.size(), 64);
+  std::optional<Eigen::Matrix3d> best;
+  double best_support = -1.0;
+  for (std::size_t a = 0; a < candidates; ++a)
+    for (std::size_t b = a + 1; b < candidates; ++b) {
+      if (std::abs(unit[b].dot(unit[a])) > max_cosine) continue;
+      const Eigen::Matrix3d axes = frameOf(unit[a], unit[b]);
+      const double s = support(axes);
+      if (s > best_support) {
+        best_support = s;
+        best = axes;
+      }
+    }
+  if (best) return best;
+  // No two planes are perpendicular: the largest plane and the coordinate axis least aligned with it.
+  Eigen::Index least = 0;
+  unit[0].cwiseAbs().minCoeff(&least);
+  return frameOf(unit[0], Eigen::Vector3d::Unit(least));
 }
 
 Eigen::Matrix3d rotationOntoAxesClosestToIdentity(const Eigen::Matrix3d& axes) {
