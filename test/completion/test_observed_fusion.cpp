@@ -277,6 +277,35 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   }
 }
 
+TEST(ObservedFusion, AnUnseenGuessOfABoxFaceTakesTheFaceAndOutranksTheOtherGuesses) {
+  // The box of seenBottomAndSide() is x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375].
+  // Predicted: a small patch of its face x = 0.95, 5 degrees off and 0.01 outside, with the
+  // confidence of a guess. The box fill puts the rest of that face's points on it.
+  const double tilt = 5.0 * 3.14159265358979 / 180.0;
+  const Plane guess = Plane::fromPointAndNormal({0.96, 0.2, 0.2}, {std::cos(tilt), std::sin(tilt), 0.0});
+  const std::vector<PlanarPrimitive> completed = {patch(guess, {0.96, 0.2, 0.2}, 0.3, 5, 0.75f)};
+  ObservedFusionOptions options;
+  options.unseen_point_fraction = 1.0;
+  options.fill_spacing = 0.05;
+  options.fill_empty_radius = 0.05;
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, seenBottomAndSide(), options, &report);
+  EXPECT_EQ(report.box_faces_taken, 1u);
+  EXPECT_EQ(report.filled_faces, 3u);  // y = 0.05, y = 0.95 and the top
+  EXPECT_NE(describe(report).find("1 unseen primitives turned onto a box face"), std::string::npos)
+      << describe(report);
+  ASSERT_EQ(fused.size(), 6u);
+  const PlanarPrimitive& face = fused[0];
+  EXPECT_TRUE(face.plane.normal.isApprox(Eigen::Vector3d(1, 0, 0), 1e-9)) << face.plane.normal.transpose();
+  EXPECT_NEAR(face.plane.signedDistance({0.95, 0.5, 0.5}), 0.0, 1e-6);
+  EXPECT_FLOAT_EQ(face.confidence, 0.99f);  // like a new box face: the candidate budget keeps it
+  EXPECT_GT(face.points.size(), 25u + 100u);
+  EXPECT_LT(maxDistanceToPlane(face, face.plane), 1e-6);
+  // Seen faces host box points without a change of plane or confidence.
+  EXPECT_FLOAT_EQ(fused[1].confidence, 1.0f);
+  EXPECT_TRUE(fused[1].plane.normal.isApprox(Eigen::Vector3d(0, 0, -1), 1e-12));
+}
+
 TEST(ObservedFusion, UnseenPredictionsKeepAFractionOfTheirPointsSeenFacesKeepAll) {
   // Seen and predicted: the top z = 1. Predicted only: the sides x = 1 (256 points, as many as
   // the shipped model gives a primitive) and y = 1 (64 points).

@@ -179,7 +179,7 @@ std::size_t thinOut(pcl::PointCloud<pcl::PointNormal>& points, double fraction, 
 // Adds grid points on the faces of the seen box where no fused point is near (see
 // ObservedFusionOptions::fill_spacing).
 void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std::vector<PlanarPrimitive>& fused,
-                 ObservedFusionReport& counts) {
+                 const std::vector<bool>& seen_face, ObservedFusionReport& counts) {
   if (seen.box.isEmpty()) return;
   const double diagonal = seen.box.diagonal().norm();
   if (!(diagonal > 0.0)) return;
@@ -222,29 +222,38 @@ void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std:
     for (const auto& q : face.points)
       if (distances[next++] > radius) empty.push_back(q);
     if (empty.empty()) continue;
-    // The fused primitive nearest to the face's plane within the fusion tolerances hosts them.
-    PlanarPrimitive* host = nullptr;
+    // The fused primitive nearest to the face's plane within the fusion tolerances hosts them;
+    // without one, a new primitive at index fused.size().
+    std::size_t host = fused.size();
     double best = std::numeric_limits<double>::infinity();
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (const auto& q : empty) centroid += q;
     centroid /= static_cast<double>(empty.size());
-    for (auto& primitive : fused) {
-      if (primitive.plane.unorientedAngleTo(face.plane) > max_angle) continue;
-      const double d = std::abs(primitive.plane.signedDistance(centroid));
+    for (std::size_t f = 0; f < fused.size(); ++f) {
+      if (fused[f].plane.unorientedAngleTo(face.plane) > max_angle) continue;
+      const double d = std::abs(fused[f].plane.signedDistance(centroid));
       if (d <= max_offset && d < best) {
         best = d;
-        host = &primitive;
+        host = f;
       }
     }
-    if (!host) {
+    if (host == fused.size()) {
       fused.emplace_back();
-      host = &fused.back();
-      host->plane = face.plane;
+      fused.back().plane = face.plane;
       // Below a seen face (1) but above the network's guesses: the seen extent implies it, and
       // PolyFit's candidate-face budget leaves out the least confident primitives first.
-      host->confidence = 0.99f;
+      fused.back().confidence = 0.99f;
       ++counts.filled_faces;
+    } else if (host < seen_face.size() && !seen_face[host]) {
+      // The network's guess of this face, a few degrees off: the seen extent fixes the plane, and
+      // like a new box face it must outrank the guesses, or the candidate-face budget may leave
+      // the hull's face out while it keeps a worse guess.
+      fused[host].plane = face.plane.normal.dot(fused[host].plane.normal) < 0.0 ? face.plane.flipped() : face.plane;
+      projectOnto(fused[host].plane, fused[host].points);
+      fused[host].confidence = std::max(fused[host].confidence, 0.99f);
+      ++counts.box_faces_taken;
     }
+    PlanarPrimitive& target = fused[host];
     pcl::PointCloud<pcl::PointNormal> added;
     for (const auto& q : empty) {
       pcl::PointNormal p;
@@ -253,8 +262,8 @@ void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std:
       p.z = static_cast<float>(q.z());
       added.push_back(p);
     }
-    projectOnto(host->plane, added);
-    host->points += added;
+    projectOnto(target.plane, added);
+    target.points += added;
     counts.filled_points += added.size();
   }
 }
@@ -269,7 +278,11 @@ std::string describe(const ObservedFusionReport& report) {
                                       std::to_string(report.clipped) + " unseen primitives with them)"
                                 : "") +
          (report.filled_points ? ", " + std::to_string(report.filled_points) + " points filled on the seen box (" +
-                                     std::to_string(report.filled_faces) + " new box faces)"
+                                     std::to_string(report.filled_faces) + " new box faces" +
+                                     (report.box_faces_taken ? ", " + std::to_string(report.box_faces_taken) +
+                                                                   " unseen primitives turned onto a box face"
+                                                             : "") +
+                                     ")"
                                : "") +
          (report.thinned_points
               ? ", " + std::to_string(report.thinned_points) + " points of unseen primitives thinned out"
@@ -379,16 +392,21 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     }
   }
   std::vector<PlanarPrimitive> fused;
+  std::vector<bool> seen_face;
   fused.reserve(completed.size() + unmatched.size());
   for (std::size_t c = 0; c < completed.size(); ++c) {
     if (absorbed[c] || clipped[c]) continue;
     if (!snapped[c])
       counts.thinned_points += thinOut(completed[c].points, options.unseen_point_fraction, options.unseen_min_points);
     fused.push_back(std::move(completed[c]));
+    seen_face.push_back(snapped[c]);
   }
-  for (auto& primitive : unmatched) fused.push_back(std::move(primitive));
+  for (auto& primitive : unmatched) {
+    fused.push_back(std::move(primitive));
+    seen_face.push_back(true);
+  }
   if (options.fill_spacing > 0.0 && !observed.empty())
-    fillSeenBox(seen_box, options, fused, counts);
+    fillSeenBox(seen_box, options, fused, seen_face, counts);
   if (report) *report = counts;
   return fused;
 }
