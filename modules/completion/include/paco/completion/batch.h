@@ -48,7 +48,7 @@ struct CollateOptions {
   /// (centre at the origin, unit diagonal) and move its ground truth the same way, as a user
   /// scan with no complete-shape frame will be at inference.
   std::string input_frame = "complete";
-  /// "as-is" or "seen-planes": with the own frame, also turn each sample so that its largest
+  /// "as-is" or "seen-planes": with the own frame, also turn each sample so that its dominant
   /// input segments' planes lie on the coordinate axes (paco::seenPlanesRotation, the box taken
   /// in the turned axes), input normals and ground truth with it; what PlaneProxyEncoder does
   /// at inference for a model whose ModelConfig::input_orientation is "seen-planes".
