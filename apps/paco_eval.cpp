@@ -27,6 +27,10 @@ namespace {
 
 const char kTool[] = "paco_eval";
 
+paco::app::FusionFlags fusionFlagsOf(const ev::MethodOptions& method) {
+  return {method.align_unseen_degrees, method.clip_margin, method.fill_box_spacing, method.unseen_point_fraction};
+}
+
 struct Options {
   std::string pred, gt;
   bool same_seed = false;
@@ -41,8 +45,7 @@ struct Options {
   bool quiet = false;
   std::string model, completion_frame = "own", observed_fusion = "on";
   // The paco method's defaults, as the library has them.
-  paco::app::FusionFlags fusion{ev::MethodOptions().align_unseen_degrees, ev::MethodOptions().clip_margin,
-                                ev::MethodOptions().fill_box_spacing, ev::MethodOptions().unseen_point_fraction};
+  paco::app::FusionFlags fusion = fusionFlagsOf(ev::MethodOptions());
   double threshold = ev::MethodOptions().confidence_threshold;
   int threads = 1;
   bool no_normals = false;

@@ -161,6 +161,20 @@ TEST(Orientation, AChamferLargerThanEveryFaceDoesNotSetTheAxes) {
   EXPECT_NEAR((chamfer->transpose() * normals[0].normalized()).cwiseAbs().maxCoeff(), 1.0, 1e-9);
 }
 
+TEST(Orientation, ALargePlaneWithoutAPerpendicularPartnerOutweighsASmallPair) {
+  // Two small perpendicular planes, and a large one perpendicular to neither: the large plane's
+  // frame carries more weight than the pair's, which leaves it off its axes.
+  const std::vector<Eigen::Vector3d> normals = {Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(1, 0, 0),
+                                                Eigen::Vector3d(0, 1, 0)};
+  const auto axes = paco::dominantPlaneAxes(normals, {1000, 10, 10});
+  ASSERT_TRUE(axes.has_value());
+  EXPECT_TRUE(axes->col(0).isApprox(normals[0].normalized(), 1e-12)) << axes->col(0).transpose();
+  // Without the large plane, the pair sets the axes.
+  const auto pair = paco::dominantPlaneAxes({normals[1], normals[2]}, {10, 10});
+  ASSERT_TRUE(pair.has_value());
+  EXPECT_TRUE(pair->isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+}
+
 TEST(Orientation, OnePlaneIsTurnedOntoItsNearestAxis) {
   const Eigen::Matrix3d R0 = turn(15.0, Eigen::Vector3d(1, 0, 0));
   const Eigen::Vector3d normal = R0 * Eigen::Vector3d(0, 0, 1);

@@ -64,11 +64,14 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
         best = axes;
       }
     }
-  if (best) return best;
-  // No two planes are perpendicular: the largest plane and the coordinate axis least aligned with it.
+  // The largest plane with the coordinate axis least aligned with it competes too: the only
+  // frame when no two planes are perpendicular, and the better one when the largest plane
+  // outweighs every perpendicular pair that leaves it off their axes.
   Eigen::Index least = 0;
   unit[0].cwiseAbs().minCoeff(&least);
-  return frameOf(unit[0], Eigen::Vector3d::Unit(least));
+  const Eigen::Matrix3d largest = frameOf(unit[0], Eigen::Vector3d::Unit(least));
+  if (!best || support(largest) > best_support) best = largest;
+  return best;
 }
 
 Eigen::Matrix3d rotationOntoAxesClosestToIdentity(const Eigen::Matrix3d& axes) {

@@ -18,10 +18,11 @@ namespace paco {
 /// Orthonormal axes (the columns, a proper rotation) of the dominant planes. Each pair of planes
 /// within `tolerance_degrees` of perpendicular spans a frame: the heavier one's normal, the other
 /// made exactly perpendicular, their cross product. The frame whose axes the largest total weight
-/// of planes lies on (within the tolerance) wins; on ties, the pair of heavier planes. With no
-/// perpendicular pair, the largest plane's normal and the coordinate axis least aligned with it,
-/// made perpendicular. Normals need not be unit or consistently oriented; planes with a zero or
-/// non-finite normal or a weight <= 0 are ignored. Empty when no plane counts.
+/// of planes lies on (within the tolerance) wins; on ties, the pair of heavier planes. One more
+/// frame competes (and is the only one when no two planes are perpendicular): the largest
+/// plane's normal and the coordinate axis least aligned with it, made perpendicular. Normals need
+/// not be unit or consistently oriented; planes with a zero or non-finite normal or a weight <= 0
+/// are ignored. Empty when no plane counts.
 std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector3d>& normals,
                                                  const std::vector<double>& weights,
                                                  double tolerance_degrees = 10.0);
