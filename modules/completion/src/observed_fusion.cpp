@@ -43,6 +43,13 @@ void projectOnto(const Plane& plane, pcl::PointCloud<pcl::PointNormal>& points) 
   }
 }
 
+// The primitive takes the plane's position and tilt but keeps its own orientation (the
+// network's, outward), and its points move onto it.
+void takePlane(PlanarPrimitive& primitive, const Plane& plane) {
+  primitive.plane = plane.normal.dot(primitive.plane.normal) < 0.0 ? plane.flipped() : plane;
+  projectOnto(primitive.plane, primitive.points);
+}
+
 double diagonalOf(const std::vector<PlanarPrimitive>& primitives) {
   Eigen::AlignedBox3d box;
   for (const auto& primitive : primitives)
@@ -248,8 +255,7 @@ void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std:
       // The network's guess of this face, a few degrees off: the seen extent fixes the plane, and
       // like a new box face it must outrank the guesses, or the candidate-face budget may leave
       // the hull's face out while it keeps a worse guess.
-      fused[host].plane = face.plane.normal.dot(fused[host].plane.normal) < 0.0 ? face.plane.flipped() : face.plane;
-      projectOnto(fused[host].plane, fused[host].points);
+      takePlane(fused[host], face.plane);
       fused[host].confidence = std::max(fused[host].confidence, 0.99f);
       ++counts.box_faces_taken;
     }
@@ -346,9 +352,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     }
     PlanarPrimitive& target = completed[best];
     if (!snapped[best]) {
-      // Keep the predicted orientation (outward), take the observed position and tilt.
-      target.plane = seen.plane.normal.dot(target.plane.normal) < 0.0 ? seen.plane.flipped() : seen.plane;
-      projectOnto(target.plane, target.points);
+      takePlane(target, seen.plane);
       // A seen face is certain, whatever the network's score: confidence 1, like the unmatched
       // observed segments (the assembler's candidate-face budget never drops those).
       target.confidence = 1.0f;
