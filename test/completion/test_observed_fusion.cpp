@@ -277,6 +277,47 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   }
 }
 
+TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
+  // seenBottomAndSide() (box x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375]) plus a seen step:
+  // a floor at z = 0.5 facing up over x in [0.5, 0.95]. Above the floor the part is not there:
+  // the top face z = 0.9375 must be filled only over x < 0.5, the face x = 0.95 only below z = 0.5.
+  std::vector<PlanarPrimitive> observed = seenBottomAndSide();
+  const Plane floor = Plane::fromPointAndNormal({0, 0, 0.5}, {0, 0, 1});
+  observed.push_back(patch(floor, {0.725, 0.275, 0.5}, 0.45, 6, 1.0f));
+  observed.push_back(patch(floor, {0.725, 0.725, 0.5}, 0.45, 6, 1.0f));
+  ObservedFusionOptions options;
+  options.fill_spacing = 0.05;       // 0.08 apart
+  options.fill_empty_radius = 0.05;  // nothing within 0.08
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved({}, observed, options, &report);
+  EXPECT_GT(report.fill_in_seen_free_space, 0u);
+  EXPECT_NE(describe(report).find("in space the scan shows empty"), std::string::npos) << describe(report);
+  std::size_t top_points = 0, side_points = 0;
+  for (const auto& primitive : fused) {
+    if (primitive.plane.normal.isApprox(Eigen::Vector3d(0, 0, 1), 1e-9) &&
+        std::abs(primitive.plane.signedDistance({0, 0, 0.9375})) < 1e-9) {
+      for (const auto& p : primitive.points) EXPECT_LT(p.x, 0.5) << "filled over the seen floor";
+      top_points += primitive.points.size();
+    }
+    if (primitive.plane.normal.isApprox(Eigen::Vector3d(1, 0, 0), 1e-9)) {
+      for (const auto& p : primitive.points) EXPECT_LT(p.z, 0.5 + 0.08) << "filled above the seen floor";
+      side_points += primitive.points.size();
+    }
+  }
+  // The top over x < 0.5 - 0.08 and the side below the floor still get their box faces: 5 x 12
+  // and 12 x 6 grid points, less the rows near seen points.
+  EXPECT_GT(top_points, 30u);
+  EXPECT_GT(side_points, 30u);
+  // Without the floor both faces are filled all over.
+  EXPECT_FALSE(fuseWithObserved({}, seenBottomAndSide(), options, &report).empty());
+  EXPECT_EQ(report.fill_in_seen_free_space, 0u);
+  // With a zero empty radius every grid point is uncovered and no line meets a seen point.
+  options.fill_empty_radius = 0.0;
+  EXPECT_FALSE(fuseWithObserved({}, observed, options, &report).empty());
+  EXPECT_EQ(report.fill_in_seen_free_space, 0u);
+  EXPECT_GT(report.filled_points, 0u);
+}
+
 TEST(ObservedFusion, AnUnseenGuessOfABoxFaceTakesTheFaceAndOutranksTheOtherGuesses) {
   // The box of seenBottomAndSide() is x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375].
   // Predicted: a small patch of its face x = 0.95, 5 degrees off and 0.01 outside, with the

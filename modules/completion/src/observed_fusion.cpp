@@ -8,10 +8,13 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <unordered_map>
+#include <utility>
 
 namespace paco {
 namespace {
@@ -183,9 +186,83 @@ std::size_t thinOut(pcl::PointCloud<pcl::PointNormal>& points, double fraction, 
   });
 }
 
-// Adds grid points on the faces of the seen box where no fused point is near (see
-// ObservedFusionOptions::fill_spacing).
-void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std::vector<PlanarPrimitive>& fused,
+// Space the scan shows to be empty: a point is in front of a seen surface when, looking from it
+// along one of the box axes, the first trusted observed point met (within `radius` of the line)
+// belongs to a segment whose normal faces back at it. A box-face point there lies over a seen
+// step, notch or chamfer, or in a gap the part does not fill: the part's boundary is that surface,
+// and filling the box face would close the concavity. Segments seen edge-on (more than 60 degrees
+// off the axis) neither show nor block. Only the hidden side of a seen surface can hold material,
+// so this needs no guess about what was not seen.
+class SeenFreeSpace {
+ public:
+  SeenFreeSpace(const std::vector<PlanarPrimitive>& observed, std::size_t min_points, const Eigen::Matrix3d& axes,
+                double radius)
+      : radius_(radius) {
+    if (!(radius_ > 0.0)) return;  // a line of no width meets no point: nothing shows empty
+    for (int k = 0; k < 3; ++k) {
+      Axis& axis = axes_[k];
+      axis.along = axes.col(k);
+      axis.across = axes.col((k + 1) % 3);
+      axis.up = axes.col((k + 2) % 3);
+      for (const auto& segment : observed) {
+        if (segment.points.size() < min_points || !(segment.plane.normal.norm() > 0.0)) continue;
+        const double facing = segment.plane.normal.normalized().dot(axis.along);
+        if (std::abs(facing) < kMinFacing) continue;
+        for (const auto& p : segment.points) {
+          const Eigen::Vector3d x = position(p);
+          axis.points.push_back({x.dot(axis.across), x.dot(axis.up), x.dot(axis.along), facing > 0.0});
+          axis.bins[key(bin(axis.points.back().a), bin(axis.points.back().b))].push_back(axis.points.size() - 1);
+        }
+      }
+    }
+  }
+
+  bool showsEmpty(const Eigen::Vector3d& q) const {
+    if (!(radius_ > 0.0)) return false;
+    for (const Axis& axis : axes_) {
+      const double qa = q.dot(axis.across), qb = q.dot(axis.up), qt = q.dot(axis.along);
+      const Projected *ahead = nullptr, *behind = nullptr;  // first met along +axis and along -axis
+      const long long ia = bin(qa), ib = bin(qb);
+      for (long long da = -1; da <= 1; ++da)
+        for (long long db = -1; db <= 1; ++db) {
+          const auto found = axis.bins.find(key(ia + da, ib + db));
+          if (found == axis.bins.end()) continue;
+          for (std::size_t i : found->second) {
+            const Projected& p = axis.points[i];
+            if ((p.a - qa) * (p.a - qa) + (p.b - qb) * (p.b - qb) > radius_ * radius_) continue;
+            if (p.t > qt && (!ahead || p.t < ahead->t)) ahead = &p;
+            if (p.t < qt && (!behind || p.t > behind->t)) behind = &p;
+          }
+        }
+      // Looking along +axis, a surface faces back when its normal points along -axis.
+      if ((ahead && !ahead->positive) || (behind && behind->positive)) return true;
+    }
+    return false;
+  }
+
+ private:
+  static constexpr double kMinFacing = 0.5;  // cos 60 degrees
+  struct Projected {
+    double a, b;    // across the axis
+    double t;       // along it
+    bool positive;  // its segment's normal points along +axis
+  };
+  struct Axis {
+    Eigen::Vector3d along, across, up;
+    std::vector<Projected> points;
+    std::unordered_map<long long, std::vector<std::size_t>> bins;
+  };
+  long long bin(double x) const { return static_cast<long long>(std::floor(x / radius_)); }
+  static long long key(long long ia, long long ib) { return ia * 2000003LL + ib; }
+
+  double radius_;
+  std::array<Axis, 3> axes_;
+};
+
+// Adds grid points on the faces of the seen box where no fused point is near and the scan does
+// not show the space empty (SeenFreeSpace; see ObservedFusionOptions::fill_spacing).
+void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observed,
+                 const ObservedFusionOptions& options, std::vector<PlanarPrimitive>& fused,
                  const std::vector<bool>& seen_face, ObservedFusionReport& counts) {
   if (seen.box.isEmpty()) return;
   const double diagonal = seen.box.diagonal().norm();
@@ -224,10 +301,18 @@ void fillSeenBox(const SeenBox& seen, const ObservedFusionOptions& options, std:
   for (const auto& face : faces) all.insert(all.end(), face.points.begin(), face.points.end());
   const std::vector<double> distances = nearestDistances(all, clouds);
   std::size_t next = 0;
+  std::optional<SeenFreeSpace> free_space;  // built once some box point is uncovered
   for (const auto& face : faces) {
     std::vector<Eigen::Vector3d> empty;
-    for (const auto& q : face.points)
-      if (distances[next++] > radius) empty.push_back(q);
+    for (const auto& q : face.points) {
+      if (distances[next++] <= radius) continue;
+      if (!free_space) free_space.emplace(observed, options.min_observed_points, seen.axes, radius);
+      if (free_space->showsEmpty(q)) {
+        ++counts.fill_in_seen_free_space;
+        continue;
+      }
+      empty.push_back(q);
+    }
     if (empty.empty()) continue;
     // The fused primitive nearest to the face's plane within the fusion tolerances hosts them;
     // without one, a new primitive at index fused.size().
@@ -290,6 +375,9 @@ std::string describe(const ObservedFusionReport& report) {
                                                              : "") +
                                      ")"
                                : "") +
+         (report.fill_in_seen_free_space ? ", " + std::to_string(report.fill_in_seen_free_space) +
+                                               " box points left out in space the scan shows empty"
+                                         : "") +
          (report.thinned_points
               ? ", " + std::to_string(report.thinned_points) + " points of unseen primitives thinned out"
               : "");
@@ -410,7 +498,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     seen_face.push_back(true);
   }
   if (options.fill_spacing > 0.0 && !observed.empty())
-    fillSeenBox(seen_box, options, fused, seen_face, counts);
+    fillSeenBox(seen_box, observed, options, fused, seen_face, counts);
   if (report) *report = counts;
   return fused;
 }

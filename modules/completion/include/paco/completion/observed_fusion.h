@@ -43,9 +43,11 @@ struct ObservedFusionOptions {
   double clip_margin = std::numeric_limits<double>::infinity();
   /// Covers the faces of the observed points' box (on the dominant seen axes) with a grid of
   /// points of this spacing (fraction of the box diagonal, at least kMinFillSpacing; 0 = off),
-  /// keeping those farther than `fill_empty_radius` from every fused point. Each face's points
-  /// join a fused primitive on (nearly) the face's plane, or become a new primitive (confidence
-  /// 0.99). An unseen primitive that hosts them takes the face's plane and confidence 0.99 too.
+  /// keeping those farther than `fill_empty_radius` from every fused point and outside the
+  /// space the scan shows empty (in front of a seen surface, looking along a box axis: over a
+  /// seen step, notch or chamfer the part's boundary is that surface, not the box face). Each
+  /// face's points join a fused primitive on (nearly) the face's plane, or become a new
+  /// primitive (confidence 0.99). An unseen primitive that hosts them takes the face's plane and confidence 0.99 too.
   /// PolyFit closes an under-supported hidden side with too small a solid (median volume 0.51
   /// of the part's at 75 % missing); most scans of a part span its extent, and the box faces
   /// give that side an outer hull where the network put nothing (doc/results.md).
@@ -75,6 +77,7 @@ struct ObservedFusionReport {
   std::size_t filled_points = 0;   ///< box-face points added where nothing covered the box
   std::size_t filled_faces = 0;    ///< box faces added as new primitives (the rest joined one)
   std::size_t box_faces_taken = 0; ///< unseen completed primitives that hosted box-face points and took the face's plane
+  std::size_t fill_in_seen_free_space = 0;  ///< uncovered box-face points left out: the scan shows them in empty space
   std::size_t thinned_points = 0;  ///< points of unseen completed primitives left out (unseen_point_fraction)
 };
 
