@@ -308,7 +308,7 @@ TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
   // and 12 x 6 grid points, less the rows near seen points.
   EXPECT_GT(top_points, 30u);
   EXPECT_GT(side_points, 30u);
-  // Without the floor both faces are filled all over.
+  // Without the floor, no box point is in space the scan shows empty.
   EXPECT_FALSE(fuseWithObserved({}, seenBottomAndSide(), options, &report).empty());
   EXPECT_EQ(report.fill_in_seen_free_space, 0u);
   // With a zero empty radius every grid point is uncovered and no line meets a seen point.

@@ -47,7 +47,8 @@ struct ObservedFusionOptions {
   /// space the scan shows empty (in front of a seen surface, looking along a box axis: over a
   /// seen step, notch or chamfer the part's boundary is that surface, not the box face). Each
   /// face's points join a fused primitive on (nearly) the face's plane, or become a new
-  /// primitive (confidence 0.99). An unseen primitive that hosts them takes the face's plane and confidence 0.99 too.
+  /// primitive (confidence 0.99). An unseen primitive that hosts them takes the face's plane
+  /// and confidence 0.99 too.
   /// PolyFit closes an under-supported hidden side with too small a solid (median volume 0.51
   /// of the part's at 75 % missing); most scans of a part span its extent, and the box faces
   /// give that side an outer hull where the network put nothing (doc/results.md).
