@@ -60,8 +60,13 @@ double diagonalOf(const std::vector<PlanarPrimitive>& primitives) {
   return box.isEmpty() ? 0.0 : box.diagonal().norm();
 }
 
-// The unit normals of the trusted observed segments (at least min_points points) and their
-// sizes, and the dominant axes they imply.
+// An observed segment whose plane is trusted: enough points to fit it, and a normal.
+bool isTrusted(const PlanarPrimitive& segment, std::size_t min_points) {
+  return segment.points.size() >= min_points && segment.plane.normal.norm() > 0.0;
+}
+
+// The unit normals of the trusted observed segments and their sizes, and the dominant axes they
+// imply.
 struct SeenNormals {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
@@ -71,7 +76,7 @@ struct SeenNormals {
 SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_t min_points) {
   SeenNormals seen;
   for (const auto& segment : observed) {
-    if (segment.points.size() < min_points || !(segment.plane.normal.norm() > 0.0)) continue;
+    if (!isTrusted(segment, min_points)) continue;
     seen.normals.push_back(segment.plane.normal.normalized());
     seen.sizes.push_back(static_cast<double>(segment.points.size()));
   }
@@ -205,7 +210,7 @@ class SeenFreeSpace {
       axis.across = axes.col((k + 1) % 3);
       axis.up = axes.col((k + 2) % 3);
       for (const auto& segment : observed) {
-        if (segment.points.size() < min_points || !(segment.plane.normal.norm() > 0.0)) continue;
+        if (!isTrusted(segment, min_points)) continue;
         const double facing = segment.plane.normal.normalized().dot(axis.along);
         if (std::abs(facing) < kMinFacing) continue;
         for (const auto& p : segment.points) {
