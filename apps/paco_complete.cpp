@@ -7,6 +7,7 @@
 
 #include "app_support.h"
 #include "fusion_step.h"
+#include "thinning_step.h"
 
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
@@ -42,6 +43,7 @@ struct Options {
   int points = 2048;
   bool use_labels = false;
   bool drop_non_finite = false;
+  std::size_t max_points = paco::kDefaultScanPointBudget;
 };
 
 void printHelp(const po::options_description& visible) {
@@ -75,6 +77,7 @@ int run(int argc, char** argv) {
       ("points", po::value(&o.points)->default_value(o.points), "points fed to the network (the training size)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch threads (0: one per hardware thread)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
+  paco::app::addMaxPointsOption(visible, o.max_points);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -94,6 +97,7 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--pcd must name a .pcd file, got '" + o.pcd + "'");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
+  paco::app::validateMaxPoints(o.max_points);
   o.fusion.validate();
   if (o.threads < 0) throw paco::app::UsageError("--threads must be >= 0");
 
@@ -128,7 +132,9 @@ int run(int argc, char** argv) {
   if (scan.points.empty()) throw paco::InvalidInputError("'" + o.input + "' holds no points");
   std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
               scan.has_normals ? ", with normals" : "");
-  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
+  // Labels name input points, so a labelled input is used as it is.
+  const auto cloud = o.use_labels ? std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points)
+                                  : paco::app::workingCloud(scan.points, o.max_points, timer);
 
   paco::PlanarSegmentation segmentation;
   timer.start("segment");

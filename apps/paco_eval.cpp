@@ -42,6 +42,7 @@ struct Options {
   double time_limit = 60.0;
   std::size_t max_candidate_faces = paco::evaluation::MethodOptions().max_candidate_faces;
   bool dataset_labels = false;
+  std::size_t max_points = paco::evaluation::MethodOptions().max_input_points;
   bool quiet = false;
   std::string model, completion_frame = "own", observed_fusion = "on";
   // The paco method's defaults, as the library has them.
@@ -162,6 +163,10 @@ int dataset(const Options& o) {
   b.method.max_candidate_faces = o.max_candidate_faces;
   b.method.segmenter = o.segmenter;
   b.method.use_dataset_labels = o.dataset_labels;
+  if (o.max_points != 0 && o.max_points < paco::evaluation::kMinInputPointBudget)
+    throw paco::app::UsageError("--max-points must be 0 (keep all) or at least " +
+                                std::to_string(paco::evaluation::kMinInputPointBudget));
+  b.method.max_input_points = o.max_points;
   b.method.qem_target_faces = o.qem_faces;
   b.method.model = o.model;
   b.method.completion_frame = o.completion_frame;
@@ -211,6 +216,8 @@ int run(int argc, char** argv) {
        "polyfit: leave out the least confident predicted primitives until the candidate faces fit (0: no limit)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct and box-prior")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
+      ("max-points", po::value(&o.max_points)->default_value(o.max_points),
+       "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")
       ("qem-faces", po::value(&o.qem_faces)->default_value(o.qem_faces), "poisson-qem: triangles after simplification")
       ("model", po::value(&o.model), "paco: model file (default: the shipped model)")
       ("completion-frame", po::value(&o.completion_frame)->default_value(o.completion_frame),

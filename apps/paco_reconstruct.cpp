@@ -7,6 +7,7 @@
 
 #include "app_support.h"
 #include "fusion_step.h"
+#include "thinning_step.h"
 
 #include <paco/assembly/polygonal_assembler.h>
 #include <paco/common/error.h>
@@ -45,6 +46,7 @@ struct Options {
   double time_limit = 60.0;
   std::size_t max_candidate_faces = paco::PolygonalAssembler::kDefaultMaxCandidateFaces;
   bool drop_non_finite = false;
+  std::size_t max_points = paco::kDefaultScanPointBudget;
   int threads = 0;
 };
 
@@ -87,6 +89,7 @@ int run(int argc, char** argv) {
        "polyfit: leave out the least confident unseen primitives until the candidate faces fit (0: no limit)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
+  paco::app::addMaxPointsOption(visible, o.max_points);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -100,6 +103,7 @@ int run(int argc, char** argv) {
   if (o.input.empty()) throw paco::app::UsageError("expected an INPUT cloud");
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
+  paco::app::validateMaxPoints(o.max_points);
   o.fusion.validate();
   if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
   if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
@@ -134,7 +138,7 @@ int run(int argc, char** argv) {
   std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
               scan.has_normals ? ", with normals" : " (normals will be estimated)");
   // A file without normals reads as zero normals, which the segmenter estimates.
-  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
+  const auto cloud = paco::app::workingCloud(scan.points, o.max_points, timer);
 
   timer.start("segment");
   paco::PlanarSegmentation segmentation;

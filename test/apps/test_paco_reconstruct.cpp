@@ -86,6 +86,50 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
   EXPECT_EQ(filesIn(dir.path()), 4u);  // input + mesh + .vg + .pcd, nothing partial
 }
 
+// A scan denser than --max-points is thinned before segmentation, and the tool says so.
+TEST(PacoReconstruct, ThinsAScanDenserThanMaxPoints) {
+  TempDir dir;
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("part.obj")) +
+                                       " --no-completion --assembler cell-complex --max-points 1000",
+                                   &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("of 4096 points kept"), std::string::npos) << log;
+  const auto groups = paco::io::loadVertexGroups(dir.file("part.vg"));
+  EXPECT_LE(groups.points.size(), 1000u);
+  EXPECT_GE(groups.points.size(), 300u);
+  EXPECT_TRUE(paco::analyseTopology(paco::io::loadMesh(dir.file("part.obj"))).isClosedManifold());
+  // The sample is within the default budget: nothing is thinned.
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("all.obj")) +
+                                       " --no-completion --assembler cell-complex",
+                                   &log),
+            0)
+      << log;
+  EXPECT_EQ(log.find("thin:"), std::string::npos) << log;
+}
+
+// A scan merged with itself gives the same primitives as the scan: the repeats are left out.
+TEST(PacoReconstruct, LeavesOutRepeatedPoints) {
+  TempDir dir;
+  paco::io::LabelledCloud cloud = paco::io::loadCloud(samplePath());
+  const std::size_t n = cloud.points.size();
+  const pcl::PointCloud<pcl::PointNormal> copy = cloud.points;  // += of itself would insert from itself
+  cloud.points += copy;
+  paco::io::saveCloud(dir.file("twice.pcd"), cloud);
+  const std::string options = " --no-completion --assembler cell-complex";
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("twice.pcd")) + " -o " + quoted(dir.file("twice.obj")) + options, &log), 0)
+      << log;
+  EXPECT_NE(log.find("left out " + std::to_string(n) + " of " + std::to_string(2 * n) + " points"), std::string::npos) << log;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("once.obj")) + options, &log), 0)
+      << log;
+  const auto twice = paco::io::loadVertexGroups(dir.file("twice.vg"));
+  const auto once = paco::io::loadVertexGroups(dir.file("once.vg"));
+  EXPECT_EQ(twice.points.size(), once.points.size());
+  EXPECT_EQ(twice.segmentation.size(), once.segmentation.size());
+}
+
 #ifdef PACO_TEST_WITH_COMPLETION
 // An untrained model with --threshold 1 keeps no completed primitive. With fusion (the default)
 // the seen faces still reach the assembler and the mesh closes; without it nothing is left to
@@ -169,6 +213,8 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--fill-box must be 0 (off) or in [0.001, 1)"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --unseen-points 0", &log), 2) << log;
   EXPECT_NE(log.find("--unseen-points must be in (0, 1]"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --max-points 100", &log), 2) << log;
+  EXPECT_NE(log.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
   EXPECT_NE(log.find("--fill-box"), std::string::npos);

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <string>
 
 namespace ev = paco::evaluation;
 
@@ -61,6 +62,37 @@ TEST(Methods, RegisteredMethodRunsAndItsExceptionBecomesAFailure) {
   EXPECT_EQ(out.reason, ev::FailureReason::Threw);
   EXPECT_EQ(out.message, "broken on purpose");
   EXPECT_TRUE(out.seconds.count("total"));
+}
+
+TEST(Methods, RepeatedPointsAreLeftOutAndDenseInputsThinnedFirst) {
+  if (!has(ev::availableMethods(), "direct")) GTEST_SKIP() << "built without paco::segmentation";
+  // A method that reports how many input points and labels it was given.
+  ev::registerMethod(
+      "test-counts", [](const ev::MethodInput& in, const ev::MethodOptions&) {
+        ev::MethodOutput out;
+        out.message = std::to_string(in.input.size()) + " " + std::to_string(in.input_labels.size());
+        return out;
+      },
+      false);
+  ev::MethodInput in;
+  in.input = sampleCloud(paco::test::makeBox({0, 0, 0}, {1, 1, 1}), 3000, 5);
+  in.input_labels.assign(in.input.size(), 0);
+  ev::MethodOptions options;
+  EXPECT_EQ(options.max_input_points, 100000u);
+  EXPECT_EQ(ev::runMethod("test-counts", in, options).message, "3000 3000");  // within the budget
+  options.max_input_points = 1000;
+  const std::string thinned = ev::runMethod("test-counts", in, options).message;
+  const std::size_t kept = std::stoul(thinned.substr(0, thinned.find(' ')));
+  EXPECT_LE(kept, 1000u);
+  EXPECT_GE(kept, 850u);
+  EXPECT_EQ(thinned.substr(thinned.find(' ')), " 0") << "labels of the full input no longer apply";
+  options.use_dataset_labels = true;  // labels name input points: nothing is thinned
+  EXPECT_EQ(ev::runMethod("test-counts", in, options).message, "3000 3000");
+  // Repeated points are left out whatever the budget.
+  options = ev::MethodOptions{};
+  const pcl::PointCloud<pcl::PointNormal> copy = in.input;  // += of itself would insert from itself
+  in.input += copy;
+  EXPECT_EQ(ev::runMethod("test-counts", in, options).message, "3000 0");
 }
 
 TEST(PoissonQem, ReconstructsABoxWithTheTargetFaceCount) {

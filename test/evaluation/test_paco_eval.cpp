@@ -76,4 +76,11 @@ TEST(PacoEvalTool, SingleModeRejectsBadInput) {
             0);
   // Neither mode chosen: a usage error.
   EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval"), &out), 2) << out;
+  // A point budget too small to segment anything.
+  EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --dataset " + quoted(dir.file("none")) +
+                                       " -o " + quoted(dir.file("out")) + " --max-points 100",
+                                   &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << out;
 }

@@ -82,6 +82,26 @@ TEST_P(EveryBackend, BoxWithoutNormalsEstimatesThem) {
   EXPECT_LT(r.worst_angle_deg, 1.0);
 }
 
+TEST_P(EveryBackend, RepeatedPointsShareTheirOriginalsLabel) {
+  // Every point of the box ten times, the copies spread through the cloud (as when a scan
+  // is merged with itself): the copies would fill each k-nearest neighbourhood; the result must be
+  // the box's six planes, with each copy labelled like its original.
+  const LabelledSample box = cleanBox();
+  const std::size_t n = box.cloud->size();
+  pcl::PointCloud<pcl::PointNormal>::Ptr repeated(new pcl::PointCloud<pcl::PointNormal>);
+  for (int copy = 0; copy < 10; ++copy) *repeated += *box.cloud;
+  auto seg = makePlanarSegmenter<pcl::PointNormal>(GetParam());
+  seg->setInputCloud(repeated);
+  PlanarSegmentation result;
+  seg->segment(result);
+  ASSERT_NO_THROW(result.validate(repeated->size()));
+  EXPECT_EQ(result.size(), 6u);
+  EXPECT_GT(result.coverage(), 0.9);
+  std::size_t differing = 0;
+  for (std::size_t i = n; i < repeated->size(); ++i) differing += result.labels[i] != result.labels[i % n];
+  EXPECT_EQ(differing, 0u);
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, EveryBackend, ::testing::ValuesIn(availablePlanarSegmenters()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string name = info.param;

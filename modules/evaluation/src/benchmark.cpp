@@ -33,6 +33,9 @@ void checkOptions(const BenchmarkOptions& options) {
     if (level < 0 || level > 2) throw InvalidInputError("runBenchmark: level " + std::to_string(level) + " is not 0, 1 or 2");
   for (int view : options.views)
     if (view < 0) throw InvalidInputError("runBenchmark: view " + std::to_string(view) + " is negative");
+  if (options.method.max_input_points != 0 && options.method.max_input_points < kMinInputPointBudget)
+    throw InvalidInputError("runBenchmark: the input point budget must be 0 (keep all) or at least " +
+                            std::to_string(kMinInputPointBudget));
   const std::vector<std::string> available = availableMethods();
   for (const auto& m : options.methods) {
     if (std::find(available.begin(), available.end(), m) == available.end()) {

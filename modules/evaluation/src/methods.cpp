@@ -8,6 +8,7 @@
 #endif
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
 #include <paco/segmentation/planar_segmenter.h>
+#include <paco/segmentation/thinning.h>
 #endif
 #ifdef PACO_EVALUATION_WITH_COMPLETION
 #include <paco/completion/observed_fusion.h>
@@ -26,6 +27,10 @@
 #include <mutex>
 
 namespace paco::evaluation {
+
+#ifdef PACO_EVALUATION_WITH_SEGMENTATION
+static_assert(kMinInputPointBudget == kMinPointBudget, "the evaluation's budget floor is the thinning's");
+#endif
 
 namespace {
 
@@ -329,7 +334,30 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
   const auto start = std::chrono::steady_clock::now();
   MethodOutput out;
   try {
+#ifdef PACO_EVALUATION_WITH_SEGMENTATION
+    // As paco_reconstruct: repeated points left out, dense inputs thinned. Not with dataset
+    // labels, which name the input's points. The time counts as the segmentation's.
+    const std::vector<int> repeat_of = options.use_dataset_labels ? std::vector<int>() : findRepeatedPoints(input.input);
+    const bool repeats = std::any_of(repeat_of.begin(), repeat_of.end(), [](int f) { return f >= 0; });
+    const bool dense = !options.use_dataset_labels && options.max_input_points > 0 &&
+                       input.input.size() > options.max_input_points;
+    if (repeats || dense) {
+      MethodInput prepared = input;
+      prepared.input_labels.clear();
+      if (repeats) removeRepeatedPoints(input.input, prepared.input);
+      if (prepared.input.size() > options.max_input_points && options.max_input_points > 0) {
+        const pcl::PointCloud<pcl::PointNormal> distinct = std::move(prepared.input);
+        thinToPointBudget(distinct, options.max_input_points, prepared.input);
+      }
+      const double preparation_seconds = secondsSince(start);
+      out = function(prepared, options);
+      out.seconds["segment"] += preparation_seconds;
+    } else {
+      out = function(input, options);
+    }
+#else
     out = function(input, options);
+#endif
   } catch (const InterruptedError&) {
     throw;
   } catch (const std::exception& e) {

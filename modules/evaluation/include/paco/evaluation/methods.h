@@ -29,6 +29,9 @@ struct MethodInput {
   std::vector<Plane> gt_planes;             ///< the complete set of GT planes (oracle only)
 };
 
+/// The smallest MethodOptions::max_input_points other than 0 (paco::kMinPointBudget).
+constexpr std::size_t kMinInputPointBudget = 256;
+
 /// Parameters shared by every method.
 struct MethodOptions {
   /// Assembler backend: "polyfit" (PolyFit + CBC, default) or "cell-complex".
@@ -43,6 +46,11 @@ struct MethodOptions {
   /// Use the dataset's labels of the input points instead of running the segmenter (default
   /// false). The dataset's labels are GT face labels unless it was built with the segmenter.
   bool use_dataset_labels = false;
+  /// Inputs with more points are thinned to about this many (paco::thinToPointBudget), and
+  /// repeated points are left out (paco::removeRepeatedPoints), before any method sees them, as
+  /// paco_reconstruct does; not with dataset labels, which name the input's points. 0: keep all, else >= kMinInputPointBudget. Default
+  /// paco::kDefaultScanPointBudget (100,000).
+  std::size_t max_input_points = 100000;
   /// poisson-qem: triangles kept by the Garland–Heckbert simplification (default 40, close to the
   /// 39 triangles of the paper's Table 3).
   std::size_t qem_target_faces = 40;

@@ -17,6 +17,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace paco {
@@ -29,6 +30,11 @@ struct PreparedCloud {
   pcl::PointCloud<pcl::PointNormal>::Ptr points{new pcl::PointCloud<pcl::PointNormal>};
   /// For each working point, its index in the user's input cloud.
   std::vector<int> source_indices;
+  /// Input points at exactly the coordinates of an earlier one: (input index, working index of
+  /// that earlier point). They are left out of the working cloud, since copies would fill every
+  /// k-nearest neighbourhood and cut the neighbourhood graph into islands, and they share the
+  /// earlier point's label.
+  std::vector<std::pair<int, int>> duplicates;
   /// User frame -> working frame.
   Normalization normalization;
   /// Size of the user's input cloud (labels of the result have this size).

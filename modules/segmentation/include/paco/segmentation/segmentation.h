@@ -1,5 +1,6 @@
 #pragma once
-// Everything of paco::segmentation: the PlanarSegmenter base, its four backends and the factory.
+// Everything of paco::segmentation: the PlanarSegmenter base, its four backends, the factory and
+// the thinning of dense scans.
 // Usage:
 //   #include <paco/segmentation/segmentation.h>
 //   auto seg = paco::makePlanarSegmenter<pcl::PointXYZ>("region-growing");
@@ -9,3 +10,4 @@
 #include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/ransac_segmenter.h>
 #include <paco/segmentation/region_growing_segmenter.h>
+#include <paco/segmentation/thinning.h>

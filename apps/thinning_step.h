@@ -1,0 +1,48 @@
+#pragma once
+// The working cloud of paco_reconstruct and paco_complete: repeated points left out, dense scans
+// thinned.
+#include "app_support.h"
+
+#include <paco/segmentation/thinning.h>
+
+#include <boost/program_options.hpp>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace paco::app {
+
+inline void addMaxPointsOption(boost::program_options::options_description& options, std::size_t& max_points) {
+  options.add_options()("max-points", boost::program_options::value(&max_points)->default_value(max_points),
+                        "thin denser inputs to about this many evenly spread points before segmenting (0: keep all)");
+}
+
+inline void validateMaxPoints(std::size_t max_points) {
+  if (max_points != 0 && max_points < kMinPointBudget)
+    throw UsageError("--max-points must be 0 (keep all) or at least " + std::to_string(kMinPointBudget));
+}
+
+/// The cloud the pipeline works on: `scan` without repeated points (paco::removeRepeatedPoints),
+/// thinned to at most `max_points` points, one per voxel (paco::thinToPointBudget), with a line
+/// for each that changed anything.
+inline std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> workingCloud(const pcl::PointCloud<pcl::PointNormal>& scan,
+                                                                        std::size_t max_points, StageTimer& timer) {
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
+  timer.start("prepare");
+  const std::size_t repeats = removeRepeatedPoints(scan, *cloud);
+  if (repeats > 0)
+    std::printf("left out %zu of %zu points that repeat another point's coordinates\n", repeats, scan.size());
+  if (max_points > 0 && cloud->size() > max_points) {
+    const pcl::PointCloud<pcl::PointNormal> distinct = std::move(*cloud);
+    const ThinningReport report = thinToPointBudget(distinct, max_points, *cloud);
+    std::printf("thin: %zu of %zu points kept, one per %.3g-unit voxel (--max-points %zu)\n", report.output_points,
+                report.input_points, report.voxel_size, max_points);
+  }
+  timer.stop();
+  return cloud;
+}
+
+}  // namespace paco::app

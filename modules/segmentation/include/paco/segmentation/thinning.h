@@ -1,0 +1,62 @@
+#pragma once
+// Thinning a dense scan to a working size before segmentation, and leaving out repeated points.
+// Usage:
+//   pcl::PointCloud<pcl::PointNormal> working;
+//   const paco::ThinningReport r = paco::thinToPointBudget(*scan, 8192, working);
+//   if (r.thinned()) std::printf("%zu -> %zu points\n", r.input_points, r.output_points);
+#include <pcl/point_cloud.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace paco {
+
+/// The smallest point budget thinToPointBudget accepts: below it a part's smaller faces keep
+/// too few points to be segmented at all.
+constexpr std::size_t kMinPointBudget = 256;
+
+/// The point budget paco_reconstruct, paco_complete and paco_eval thin scans to by default. Far
+/// above it a scan's seen faces outnumber the completed points and the box fill so much that
+/// PolyFit leaves the hidden side out, and segmentation alone takes seconds. On 250,000-point
+/// MFCAD scans 100,000 did best of 40,000, 100,000 and all; up to 40,000 points, keeping all
+/// did best (doc/results.md, "Dense scans").
+constexpr std::size_t kDefaultScanPointBudget = 100000;
+
+/// What thinToPointBudget did.
+struct ThinningReport {
+  std::size_t input_points = 0;   ///< points of the input cloud (finite or not)
+  std::size_t output_points = 0;  ///< points kept
+  double voxel_size = 0.0;        ///< voxel edge in the cloud's units; 0 when nothing was thinned
+  bool thinned() const { return output_points < input_points; }
+};
+
+/// Keeps at most `max_points` points of `input`, evenly spread: the input point nearest the
+/// centre of each occupied voxel (pcl::UniformSampling), with the voxel edge searched so that
+/// the count lands between 85 % and 100 % of the budget when it can.
+///
+/// Why: segmenters count points (GoCoPP's smallest primitive has 50), so a scan ten times
+/// denser than the clouds they were tuned on splits into hundreds of small segments, and
+/// PolyFit's candidate generation then takes minutes. Kept points are input points as they
+/// are: normals stay exact, where a voxel grid's centroids would average them across edges.
+///
+/// A cloud with at most `max_points` points is copied as it is, non-finite points included.
+/// Otherwise non-finite points are left out. Throws InvalidInputError when `max_points` is
+/// below kMinPointBudget or the input has no finite point. `input` and `output` may not be
+/// the same object. Instantiated for pcl::PointXYZ and pcl::PointNormal.
+template <typename PointT>
+ThinningReport thinToPointBudget(const pcl::PointCloud<PointT>& input, std::size_t max_points,
+                                 pcl::PointCloud<PointT>& output);
+
+/// For each point, the index of the first point at exactly the same coordinates, or -1 when it
+/// is the first there (non-finite points are never repeats). Repeats add no information, but a
+/// scan merged with itself carries them, and they fill k-nearest neighbourhoods and outweigh the
+/// completed points. Instantiated for pcl::PointXYZ and pcl::PointNormal.
+template <typename PointT>
+std::vector<int> findRepeatedPoints(const pcl::PointCloud<PointT>& cloud);
+
+/// `input` without its repeated points (findRepeatedPoints), in input order; returns how many
+/// were left out. `input` and `output` may not be the same object.
+template <typename PointT>
+std::size_t removeRepeatedPoints(const pcl::PointCloud<PointT>& input, pcl::PointCloud<PointT>& output);
+
+}  // namespace paco

@@ -1,0 +1,162 @@
+// thinToPointBudget: a dense scan is cut to a working size of even density, with input points
+// kept as they are, and segmentation still finds its faces.
+#include "segmentation_fixtures.h"
+#include "shapes.h"
+
+#include <paco/common/error.h>
+#include <paco/segmentation/segmentation.h>
+#include <paco/segmentation/thinning.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+#include <tuple>
+
+namespace paco {
+namespace {
+
+using test::LabelledSample;
+using Key = std::tuple<float, float, float>;
+
+Key keyOf(const pcl::PointNormal& p) { return {p.x, p.y, p.z}; }
+
+double faceArea(const SurfaceMesh& mesh, std::size_t face) {
+  Eigen::Vector3d twice_area = Eigen::Vector3d::Zero();  // Newell: any planar polygon
+  const auto& loop = mesh.faces[face];
+  for (std::size_t i = 0; i < loop.size(); ++i)
+    twice_area += mesh.vertices[loop[i]].cross(mesh.vertices[loop[(i + 1) % loop.size()]]);
+  return 0.5 * twice_area.norm();
+}
+
+/// A dense L-bracket with scanner noise (0.2 % of its diagonal along the normal).
+LabelledSample denseNoisyBracket(std::size_t points) {
+  SurfaceMesh mesh = test::makeLBracket();
+  test::transformMesh(mesh, test::obliqueRotation(), {0.3, -0.2, 0.1});
+  LabelledSample s = test::sampleShape(mesh, points, 5);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.0f, 0.002f * 1.3f);
+  for (auto& p : *s.cloud) p.getVector3fMap() += noise(rng) * p.getNormalVector3fMap();
+  return s;
+}
+
+/// The thinned points with their GT labels, found by exact position in the input.
+LabelledSample labelThinned(const LabelledSample& dense, const pcl::PointCloud<pcl::PointNormal>& thinned) {
+  std::map<Key, int> label_at;
+  for (std::size_t i = 0; i < dense.cloud->size(); ++i) label_at[keyOf((*dense.cloud)[i])] = dense.labels[i];
+  LabelledSample out;
+  out.plane_normals = dense.plane_normals;
+  for (const auto& p : thinned) {
+    const auto it = label_at.find(keyOf(p));
+    if (it == label_at.end()) ADD_FAILURE() << "a thinned point is not an input point";
+    out.cloud->push_back(p);
+    out.labels.push_back(it == label_at.end() ? -1 : it->second);
+  }
+  return out;
+}
+
+TEST(Thinning, KeepsInputPointsEvenlyWithinTheBudget) {
+  // A box whose faces differ in area: after thinning, each face keeps a share of the points
+  // close to its share of the area, though the input is 4 times denser on one face.
+  SurfaceMesh box = test::makeBox({0, 0, 0}, {1.0, 0.8, 0.6});
+  LabelledSample dense = test::sampleShape(box, 40000, 9);
+  const LabelledSample extra = test::sampleShape(box, 120000, 10);
+  for (std::size_t i = 0; i < extra.cloud->size(); ++i)
+    if (extra.labels[i] == dense.labels.front()) {
+      dense.cloud->push_back((*extra.cloud)[i]);
+      dense.labels.push_back(extra.labels[i]);
+    }
+  pcl::PointCloud<pcl::PointNormal> thinned;
+  const ThinningReport report = thinToPointBudget(*dense.cloud, 4000, thinned);
+  EXPECT_TRUE(report.thinned());
+  EXPECT_EQ(report.input_points, dense.cloud->size());
+  EXPECT_EQ(report.output_points, thinned.size());
+  EXPECT_LE(thinned.size(), 4000u);
+  EXPECT_GE(thinned.size(), 3400u);  // 85 % of the budget
+  EXPECT_GT(report.voxel_size, 0.0);
+
+  const LabelledSample labelled = labelThinned(dense, thinned);
+  std::map<int, double> area_share, point_share;
+  double total_area = 0.0;
+  for (std::size_t f = 0; f < box.faces.size(); ++f) total_area += faceArea(box, f);
+  for (std::size_t f = 0; f < box.faces.size(); ++f) area_share[static_cast<int>(f)] = faceArea(box, f) / total_area;
+  for (const int l : labelled.labels) point_share[l] += 1.0 / static_cast<double>(labelled.labels.size());
+  for (const auto& [face, share] : area_share)
+    EXPECT_NEAR(point_share[face], share, 0.25 * share) << "face " << face;
+  // Normals come from the input as they are.
+  for (const auto& p : thinned) EXPECT_NEAR(p.getNormalVector3fMap().norm(), 1.0f, 1e-5f);
+}
+
+TEST(Thinning, AThinnedNoisyScanStillSegmentsIntoItsFaces) {
+  const LabelledSample dense = denseNoisyBracket(80000);
+  pcl::PointCloud<pcl::PointNormal>::Ptr thinned(new pcl::PointCloud<pcl::PointNormal>);
+  thinToPointBudget(*dense.cloud, 8192, *thinned);
+  const LabelledSample labelled = labelThinned(dense, *thinned);
+
+  auto seg = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  seg->setInputCloud(thinned);
+  PlanarSegmentation result;
+  seg->segment(result);
+  const test::PlaneRecovery r = test::scoreRecovery(labelled, result);
+  EXPECT_EQ(r.visible, 8);  // every face of the L-bracket
+  EXPECT_EQ(r.found, r.visible);
+  EXPECT_LT(r.worst_angle_deg, 1.0);
+  EXPECT_LE(result.size(), 10u) << "a few fragments at most, not one per neighbourhood";
+}
+
+TEST(Thinning, ACloudWithinTheBudgetIsCopiedAsItIs) {
+  const LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 1000, 1);
+  box.cloud->push_back(pcl::PointNormal());  // a non-finite point stays: nothing is thinned
+  box.cloud->back().x = std::numeric_limits<float>::quiet_NaN();
+  pcl::PointCloud<pcl::PointNormal> out;
+  const ThinningReport report = thinToPointBudget(*box.cloud, 1001, out);
+  EXPECT_FALSE(report.thinned());
+  EXPECT_EQ(report.voxel_size, 0.0);
+  ASSERT_EQ(out.size(), box.cloud->size());
+  for (std::size_t i = 0; i + 1 < out.size(); ++i) EXPECT_EQ(keyOf(out[i]), keyOf((*box.cloud)[i]));
+}
+
+TEST(Thinning, NonFinitePointsAreLeftOutWhenThinning) {
+  LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 3000, 2);
+  for (std::size_t i = 0; i < box.cloud->size(); i += 10) (*box.cloud)[i].z = std::numeric_limits<float>::infinity();
+  pcl::PointCloud<pcl::PointNormal> out;
+  const ThinningReport report = thinToPointBudget(*box.cloud, 1000, out);
+  EXPECT_TRUE(report.thinned());
+  EXPECT_LE(out.size(), 1000u);
+  EXPECT_GE(out.size(), 850u);
+  for (const auto& p : out) EXPECT_TRUE(std::isfinite(p.z));
+}
+
+TEST(RepeatedPoints, EachRepeatNamesTheFirstPointAtItsPosition) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (const auto& xyz : {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0, 0, 0),
+                          Eigen::Vector3f(1, 0, 1e-6f), Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0)})
+    cloud.push_back(pcl::PointXYZ(xyz.x(), xyz.y(), xyz.z()));
+  cloud.push_back(pcl::PointXYZ(std::numeric_limits<float>::quiet_NaN(), 0, 0));
+  cloud.push_back(pcl::PointXYZ(std::numeric_limits<float>::quiet_NaN(), 0, 0));
+  EXPECT_EQ(findRepeatedPoints(cloud), (std::vector<int>{-1, -1, 0, -1, 0, 1, -1, -1}));
+  pcl::PointCloud<pcl::PointXYZ> distinct;
+  EXPECT_EQ(removeRepeatedPoints(cloud, distinct), 3u);
+  ASSERT_EQ(distinct.size(), 5u);
+  EXPECT_EQ(distinct[2].z, 1e-6f);  // close is not the same: only exact repeats go
+  EXPECT_THROW(removeRepeatedPoints(cloud, cloud), InvalidInputError);
+}
+
+TEST(Thinning, BadInputIsAClearError) {
+  const LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 1000, 3);
+  pcl::PointCloud<pcl::PointNormal> out;
+  EXPECT_THROW(thinToPointBudget(*box.cloud, kMinPointBudget - 1, out), InvalidInputError);
+  EXPECT_THROW(thinToPointBudget(*box.cloud, 500, *box.cloud), InvalidInputError);
+  pcl::PointCloud<pcl::PointNormal> all_nan(600, 1, pcl::PointNormal());
+  for (auto& p : all_nan) p.x = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(thinToPointBudget(all_nan, 500, out), InvalidInputError);
+  // Coincident points thin to one.
+  pcl::PointCloud<pcl::PointNormal> same(600, 1, pcl::PointNormal());
+  EXPECT_EQ(thinToPointBudget(same, 500, out).output_points, 1u);
+  EXPECT_EQ(out.size(), 1u);
+}
+
+}  // namespace
+}  // namespace paco
