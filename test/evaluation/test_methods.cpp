@@ -78,7 +78,7 @@ TEST(Methods, RepeatedPointsAreLeftOutAndDenseInputsThinnedFirst) {
   in.input = sampleCloud(paco::test::makeBox({0, 0, 0}, {1, 1, 1}), 3000, 5);
   in.input_labels.assign(in.input.size(), 0);
   ev::MethodOptions options;
-  EXPECT_EQ(options.max_input_points, 100000u);
+  EXPECT_EQ(options.max_input_points, 20000u);
   EXPECT_EQ(ev::runMethod("test-counts", in, options).message, "3000 3000");  // within the budget
   options.max_input_points = 1000;
   const std::string thinned = ev::runMethod("test-counts", in, options).message;

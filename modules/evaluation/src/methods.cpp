@@ -30,6 +30,7 @@ namespace paco::evaluation {
 
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
 static_assert(kMinInputPointBudget == kMinPointBudget, "the evaluation's budget floor is the thinning's");
+static_assert(kDefaultInputPointBudget == kDefaultScanPointBudget, "the evaluation thins as paco_reconstruct");
 #endif
 
 namespace {

@@ -29,8 +29,10 @@ struct MethodInput {
   std::vector<Plane> gt_planes;             ///< the complete set of GT planes (oracle only)
 };
 
-/// The smallest MethodOptions::max_input_points other than 0 (paco::kMinPointBudget).
+/// The smallest MethodOptions::max_input_points other than 0 (paco::kMinPointBudget), and its
+/// default (paco::kDefaultScanPointBudget, as paco_reconstruct's).
 constexpr std::size_t kMinInputPointBudget = 256;
+constexpr std::size_t kDefaultInputPointBudget = 20000;
 
 /// Parameters shared by every method.
 struct MethodOptions {
@@ -48,9 +50,9 @@ struct MethodOptions {
   bool use_dataset_labels = false;
   /// Inputs with more points are thinned to about this many (paco::thinToPointBudget), and
   /// repeated points are left out (paco::removeRepeatedPoints), before any method sees them, as
-  /// paco_reconstruct does; not with dataset labels, which name the input's points. 0: keep all, else >= kMinInputPointBudget. Default
-  /// paco::kDefaultScanPointBudget (100,000).
-  std::size_t max_input_points = 100000;
+  /// paco_reconstruct does; not with dataset labels, which name the input's points. 0: keep
+  /// all, else >= kMinInputPointBudget.
+  std::size_t max_input_points = kDefaultInputPointBudget;
   /// poisson-qem: triangles kept by the Garland–Heckbert simplification (default 40, close to the
   /// 39 triangles of the paper's Table 3).
   std::size_t qem_target_faces = 40;

@@ -15,12 +15,12 @@ namespace paco {
 /// too few points to be segmented at all.
 constexpr std::size_t kMinPointBudget = 256;
 
-/// The point budget paco_reconstruct, paco_complete and paco_eval thin scans to by default. Far
-/// above it a scan's seen faces outnumber the completed points and the box fill so much that
-/// PolyFit leaves the hidden side out, and segmentation alone takes seconds. On 250,000-point
-/// MFCAD scans 100,000 did best of 40,000, 100,000 and all; up to 40,000 points, keeping all
-/// did best (doc/results.md, "Dense scans").
-constexpr std::size_t kDefaultScanPointBudget = 100000;
+/// The point budget paco_reconstruct, paco_complete and paco_eval thin scans to by default.
+/// Above it a scan's seen faces outnumber the completed points and the box fill so much that
+/// PolyFit often leaves the hidden side out, and a 250,000-point scan takes 20 s. Of budgets
+/// 8,192, 20,000, 40,000, 100,000 and all, 20,000 did best or close to it on 40,000- and
+/// 250,000-point MFCAD scans (doc/results.md, "Dense and repeated scans").
+constexpr std::size_t kDefaultScanPointBudget = 20000;
 
 /// What thinToPointBudget did.
 struct ThinningReport {
