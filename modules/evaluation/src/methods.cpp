@@ -338,7 +338,8 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
     // As paco_reconstruct: repeated points left out, dense inputs thinned. Not with dataset
     // labels, which name the input's points. The time counts as the segmentation's.
-    const std::vector<int> repeat_of = options.use_dataset_labels ? std::vector<int>() : findRepeatedPoints(input.input);
+    const std::vector<int> repeat_of =
+        options.use_dataset_labels ? std::vector<int>() : findRepeatedPoints(input.input);
     const bool repeats = std::any_of(repeat_of.begin(), repeat_of.end(), [](int f) { return f >= 0; });
     const bool dense = !options.use_dataset_labels && options.max_input_points > 0 &&
                        input.input.size() > options.max_input_points;

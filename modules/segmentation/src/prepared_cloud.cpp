@@ -70,8 +70,8 @@ bool usableNormal(const pcl::PointNormal& p) {
 }
 
 // Moves points with exactly the coordinates of an earlier point out of the working cloud, into
-// prepared.duplicates.
-void removeDuplicates(PreparedCloud& prepared) {
+// prepared.repeats.
+void setAsideRepeatedPoints(PreparedCloud& prepared) {
   auto& points = *prepared.points;
   const std::vector<int> first_of = findRepeatedPoints(points);
   if (std::none_of(first_of.begin(), first_of.end(), [](int f) { return f >= 0; })) return;
@@ -87,7 +87,7 @@ void removeDuplicates(PreparedCloud& prepared) {
   }
   for (std::size_t i = 0; i < points.size(); ++i)
     if (first_of[i] >= 0)
-      prepared.duplicates.emplace_back(prepared.source_indices[i], working_index[static_cast<std::size_t>(first_of[i])]);
+      prepared.repeats.emplace_back(prepared.source_indices[i], working_index[static_cast<std::size_t>(first_of[i])]);
   points = std::move(kept);
   prepared.source_indices = std::move(kept_sources);
 }
@@ -102,7 +102,7 @@ void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector
   points.reserve(gathered.size());
   prepared.source_indices.clear();
   prepared.source_indices.reserve(gathered.size());
-  prepared.duplicates.clear();
+  prepared.repeats.clear();
   std::size_t dropped = 0;
   for (std::size_t i = 0; i < gathered.size(); ++i) {
     const auto& p = gathered[i];
@@ -116,14 +116,14 @@ void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector
   if (dropped > 0)
     PCL_WARN("[paco::PlanarSegmenter] dropped %zu of %zu points with NaN/Inf coordinates; they get label -1\n",
              dropped, gathered.size());
-  removeDuplicates(prepared);
+  setAsideRepeatedPoints(prepared);
   if (points.size() < 3)
     throw InvalidInputError(
         "PlanarSegmenter: a plane needs at least 3 distinct points with finite coordinates; the input has " +
         std::to_string(points.size()) +
         (dropped > 0 ? " (after dropping " + std::to_string(dropped) + " non-finite ones)" : std::string()) +
-        (prepared.duplicates.empty() ? std::string()
-                                     : " (" + std::to_string(prepared.duplicates.size()) + " more repeat their coordinates)") +
+        (prepared.repeats.empty() ? std::string()
+                                     : " (" + std::to_string(prepared.repeats.size()) + " more repeat their coordinates)") +
         "; give a larger cloud");
   points.width = static_cast<std::uint32_t>(points.size());
   points.height = 1;
@@ -250,15 +250,15 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
   std::vector<int> segment_of(points.size(), -1);
   for (std::size_t s = 0; s < fitted.size(); ++s)
     for (const int i : fitted[s].members) segment_of[static_cast<std::size_t>(i)] = static_cast<int>(s);
-  std::vector<std::vector<int>> duplicates_of(fitted.size());
-  for (const auto& [source, working] : prepared.duplicates)
+  std::vector<std::vector<int>> repeats_of(fitted.size());
+  for (const auto& [source, working] : prepared.repeats)
     if (segment_of[static_cast<std::size_t>(working)] >= 0)
-      duplicates_of[static_cast<std::size_t>(segment_of[static_cast<std::size_t>(working)])].push_back(source);
+      repeats_of[static_cast<std::size_t>(segment_of[static_cast<std::size_t>(working)])].push_back(source);
   for (std::size_t s = 0; s < fitted.size(); ++s) {
     pcl::PointIndices segment;
-    segment.indices.reserve(fitted[s].members.size() + duplicates_of[s].size());
+    segment.indices.reserve(fitted[s].members.size() + repeats_of[s].size());
     for (const int i : fitted[s].members) segment.indices.push_back(prepared.source_indices[static_cast<std::size_t>(i)]);
-    segment.indices.insert(segment.indices.end(), duplicates_of[s].begin(), duplicates_of[s].end());
+    segment.indices.insert(segment.indices.end(), repeats_of[s].begin(), repeats_of[s].end());
     for (const int source : segment.indices) result.labels[static_cast<std::size_t>(source)] = static_cast<int>(s);
     std::sort(segment.indices.begin(), segment.indices.end());
     result.planes.push_back(fitted[s].plane);

@@ -34,7 +34,7 @@ struct PreparedCloud {
   /// that earlier point). They are left out of the working cloud, since copies would fill every
   /// k-nearest neighbourhood and cut the neighbourhood graph into islands, and they share the
   /// earlier point's label.
-  std::vector<std::pair<int, int>> duplicates;
+  std::vector<std::pair<int, int>> repeats;
   /// User frame -> working frame.
   Normalization normalization;
   /// Size of the user's input cloud (labels of the result have this size).
