@@ -34,10 +34,10 @@ struct ThinningReport {
 /// centre of each occupied voxel (pcl::UniformSampling), with the voxel edge searched so that
 /// the count lands between 85 % and 100 % of the budget when it can.
 ///
-/// Why: segmenters count points (GoCoPP's smallest primitive has 50), so a scan ten times
-/// denser than the clouds they were tuned on splits into hundreds of small segments, and
-/// PolyFit's candidate generation then takes minutes. Kept points are input points as they
-/// are: normals stay exact, where a voxel grid's centroids would average them across edges.
+/// Why: PolyFit weighs a scan's seen points against the completed ones and the box fill, and
+/// the points of a dense scan outweigh them, so the hidden side is left out; every later stage
+/// also takes time in proportion to the points. Kept points are input points as they are:
+/// normals stay exact, where a voxel grid's centroids would average them across edges.
 ///
 /// A cloud with at most `max_points` points is copied as it is, non-finite points included.
 /// Otherwise non-finite points are left out. Throws InvalidInputError when `max_points` is
