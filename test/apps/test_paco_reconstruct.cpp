@@ -119,11 +119,14 @@ TEST(PacoReconstruct, LeavesOutRepeatedPoints) {
   paco::io::saveCloud(dir.file("twice.pcd"), cloud);
   const std::string options = " --no-completion --assembler cell-complex";
   std::string log;
-  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("twice.pcd")) + " -o " + quoted(dir.file("twice.obj")) + options, &log), 0)
-      << log;
-  EXPECT_NE(log.find("left out " + std::to_string(n) + " of " + std::to_string(2 * n) + " points"), std::string::npos) << log;
-  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("once.obj")) + options, &log), 0)
-      << log;
+  const std::string twice_command =
+      tool() + " " + quoted(dir.file("twice.pcd")) + " -o " + quoted(dir.file("twice.obj")) + options;
+  ASSERT_EQ(paco::test::runCommand(twice_command, &log), 0) << log;
+  const std::string said = "left out " + std::to_string(n) + " of " + std::to_string(2 * n) + " points";
+  EXPECT_NE(log.find(said), std::string::npos) << log;
+  const std::string once_command =
+      tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("once.obj")) + options;
+  ASSERT_EQ(paco::test::runCommand(once_command, &log), 0) << log;
   const auto twice = paco::io::loadVertexGroups(dir.file("twice.vg"));
   const auto once = paco::io::loadVertexGroups(dir.file("once.vg"));
   EXPECT_EQ(twice.points.size(), once.points.size());

@@ -122,8 +122,9 @@ void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector
         "PlanarSegmenter: a plane needs at least 3 distinct points with finite coordinates; the input has " +
         std::to_string(points.size()) +
         (dropped > 0 ? " (after dropping " + std::to_string(dropped) + " non-finite ones)" : std::string()) +
-        (prepared.repeats.empty() ? std::string()
-                                     : " (" + std::to_string(prepared.repeats.size()) + " more repeat their coordinates)") +
+        (prepared.repeats.empty()
+             ? std::string()
+             : " (" + std::to_string(prepared.repeats.size()) + " more repeat their coordinates)") +
         "; give a larger cloud");
   points.width = static_cast<std::uint32_t>(points.size());
   points.height = 1;
@@ -257,7 +258,8 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
   for (std::size_t s = 0; s < fitted.size(); ++s) {
     pcl::PointIndices segment;
     segment.indices.reserve(fitted[s].members.size() + repeats_of[s].size());
-    for (const int i : fitted[s].members) segment.indices.push_back(prepared.source_indices[static_cast<std::size_t>(i)]);
+    for (const int i : fitted[s].members)
+      segment.indices.push_back(prepared.source_indices[static_cast<std::size_t>(i)]);
     segment.indices.insert(segment.indices.end(), repeats_of[s].begin(), repeats_of[s].end());
     for (const int source : segment.indices) result.labels[static_cast<std::size_t>(source)] = static_cast<int>(s);
     std::sort(segment.indices.begin(), segment.indices.end());

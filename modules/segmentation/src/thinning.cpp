@@ -71,7 +71,8 @@ ThinningReport thinToPointBudget(const pcl::PointCloud<PointT>& input, std::size
     if (fits > 0.0 && too_small > 0.0)
       voxel = std::sqrt(fits * too_small);
     else  // no bracket yet: step by the square root of the overshoot (area scales as voxel^-2)
-      voxel = std::max(smallest_voxel, voxel * std::sqrt(double(kept) / double(max_points)) * (kept > max_points ? 1.02 : 0.98));
+      voxel = std::max(smallest_voxel,
+                       voxel * std::sqrt(double(kept) / double(max_points)) * (kept > max_points ? 1.02 : 0.98));
     kept = countAt(voxel);
   }
   if (fits == 0.0) {  // the passes ran out before any voxel fitted: grow it until one does
