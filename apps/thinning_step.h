@@ -25,23 +25,20 @@ inline void validateMaxPoints(std::size_t max_points) {
     throw UsageError("--max-points must be 0 (keep all) or at least " + std::to_string(kMinPointBudget));
 }
 
-/// The cloud the pipeline works on: `scan` without repeated points (paco::removeRepeatedPoints),
-/// thinned to at most `max_points` points, one per voxel (paco::thinToPointBudget), with a line
-/// for each that changed anything.
+/// The cloud the pipeline works on (paco::prepareScanPoints: repeated points left out, then
+/// thinned to `max_points`), with a line for each step that changed anything.
 inline std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> workingCloud(const pcl::PointCloud<pcl::PointNormal>& scan,
                                                                         std::size_t max_points, StageTimer& timer) {
   auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
   timer.start("prepare");
-  const std::size_t repeats = removeRepeatedPoints(scan, *cloud);
-  if (repeats > 0)
-    std::printf("left out %zu of %zu points that repeat another point's coordinates\n", repeats, scan.size());
-  if (max_points > 0 && cloud->size() > max_points) {
-    const pcl::PointCloud<pcl::PointNormal> distinct = std::move(*cloud);
-    const ThinningReport report = thinToPointBudget(distinct, max_points, *cloud);
-    std::printf("thin: %zu of %zu points kept, one per %.3g-unit voxel (--max-points %zu)\n", report.output_points,
-                report.input_points, report.voxel_size, max_points);
-  }
+  const ScanPreparationReport report = prepareScanPoints(scan, max_points, *cloud);
   timer.stop();
+  if (report.repeats_removed > 0)
+    std::printf("left out %zu of %zu points that repeat another point's coordinates\n", report.repeats_removed,
+                scan.size());
+  if (report.thinning.thinned())
+    std::printf("thin: %zu of %zu points kept, one per %.3g-unit voxel (--max-points %zu)\n",
+                report.thinning.output_points, report.thinning.input_points, report.thinning.voxel_size, max_points);
   return cloud;
 }
 

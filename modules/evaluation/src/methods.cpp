@@ -338,19 +338,13 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
     // As paco_reconstruct: repeated points left out, dense inputs thinned. Not with dataset
     // labels, which name the input's points. The time counts as the segmentation's.
-    const std::vector<int> repeat_of =
-        options.use_dataset_labels ? std::vector<int>() : findRepeatedPoints(input.input);
-    const bool repeats = std::any_of(repeat_of.begin(), repeat_of.end(), [](int f) { return f >= 0; });
-    const bool dense = !options.use_dataset_labels && options.max_input_points > 0 &&
-                       input.input.size() > options.max_input_points;
-    if (repeats || dense) {
+    pcl::PointCloud<pcl::PointNormal> working;
+    const bool changed = !options.use_dataset_labels &&
+                         prepareScanPoints(input.input, options.max_input_points, working).changed();
+    if (changed) {
       MethodInput prepared = input;
+      prepared.input = std::move(working);
       prepared.input_labels.clear();
-      if (repeats) removeRepeatedPoints(input.input, prepared.input);
-      if (prepared.input.size() > options.max_input_points && options.max_input_points > 0) {
-        const pcl::PointCloud<pcl::PointNormal> distinct = std::move(prepared.input);
-        thinToPointBudget(distinct, options.max_input_points, prepared.input);
-      }
       const double preparation_seconds = secondsSince(start);
       out = function(prepared, options);
       out.seconds["segment"] += preparation_seconds;

@@ -113,6 +113,23 @@ std::size_t removeRepeatedPoints(const pcl::PointCloud<PointT>& input, pcl::Poin
   return input.size() - output.size();
 }
 
+template <typename PointT>
+ScanPreparationReport prepareScanPoints(const pcl::PointCloud<PointT>& input, std::size_t max_points,
+                                        pcl::PointCloud<PointT>& output) {
+  ScanPreparationReport report;
+  report.repeats_removed = removeRepeatedPoints(input, output);
+  report.thinning.input_points = report.thinning.output_points = output.size();
+  if (max_points > 0 && output.size() > max_points) {
+    const pcl::PointCloud<PointT> distinct = std::move(output);
+    report.thinning = thinToPointBudget(distinct, max_points, output);
+  }
+  return report;
+}
+
+template ScanPreparationReport prepareScanPoints<pcl::PointXYZ>(const pcl::PointCloud<pcl::PointXYZ>&, std::size_t,
+                                                                 pcl::PointCloud<pcl::PointXYZ>&);
+template ScanPreparationReport prepareScanPoints<pcl::PointNormal>(const pcl::PointCloud<pcl::PointNormal>&,
+                                                                    std::size_t, pcl::PointCloud<pcl::PointNormal>&);
 template std::vector<int> findRepeatedPoints<pcl::PointXYZ>(const pcl::PointCloud<pcl::PointXYZ>&);
 template std::vector<int> findRepeatedPoints<pcl::PointNormal>(const pcl::PointCloud<pcl::PointNormal>&);
 template std::size_t removeRepeatedPoints<pcl::PointXYZ>(const pcl::PointCloud<pcl::PointXYZ>&,

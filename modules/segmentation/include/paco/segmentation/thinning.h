@@ -59,4 +59,19 @@ std::vector<int> findRepeatedPoints(const pcl::PointCloud<PointT>& cloud);
 template <typename PointT>
 std::size_t removeRepeatedPoints(const pcl::PointCloud<PointT>& input, pcl::PointCloud<PointT>& output);
 
+/// What prepareScanPoints did.
+struct ScanPreparationReport {
+  std::size_t repeats_removed = 0;  ///< points left out as repeats
+  ThinningReport thinning;          ///< of the points left after the repeats
+  bool changed() const { return repeats_removed > 0 || thinning.thinned(); }
+};
+
+/// A scan as the pipeline works on it (paco_reconstruct, paco_complete, paco_eval): `input`
+/// without its repeated points (removeRepeatedPoints), then thinned to `max_points`
+/// (thinToPointBudget) when more remain; 0 keeps them all. `input` and `output` may not be the
+/// same object.
+template <typename PointT>
+ScanPreparationReport prepareScanPoints(const pcl::PointCloud<PointT>& input, std::size_t max_points,
+                                        pcl::PointCloud<PointT>& output);
+
 }  // namespace paco
