@@ -76,6 +76,7 @@ struct PlaneRecovery {
   int visible = 0;          ///< GT planes with >= min_points points
   int found = 0;
   double worst_angle_deg = 0.0;  ///< largest angle between a found GT plane and its segment's plane
+  int facing_inwards = 0;        ///< found planes whose segment's normal is against the GT's outward one
 };
 
 inline PlaneRecovery scoreRecovery(const LabelledSample& gt, const PlanarSegmentation& seg, int min_points = 50) {
@@ -104,8 +105,10 @@ inline PlaneRecovery scoreRecovery(const LabelledSample& gt, const PlanarSegment
     }
     if (best_iou >= 0.5) {
       ++r.found;
-      const double c = std::min(1.0, std::abs(seg.planes[static_cast<std::size_t>(best)].normal.dot(
-                                         gt.plane_normals[static_cast<std::size_t>(g)])));
+      const double oriented = seg.planes[static_cast<std::size_t>(best)].normal.dot(
+          gt.plane_normals[static_cast<std::size_t>(g)]);
+      if (oriented < 0.0) ++r.facing_inwards;
+      const double c = std::min(1.0, std::abs(oriented));
       r.worst_angle_deg = std::max(r.worst_angle_deg, std::acos(c) * 180.0 / M_PI);
     }
   }

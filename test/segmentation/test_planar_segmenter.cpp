@@ -82,6 +82,21 @@ TEST_P(EveryBackend, BoxWithoutNormalsEstimatesThem) {
   EXPECT_LT(r.worst_angle_deg, 1.0);
 }
 
+TEST_P(EveryBackend, PlanesWithEstimatedNormalsFaceOutwardsAlsoInAConcaveCorner) {
+  // The L-bracket's two inner faces lie on the far side of the box centre from the way they
+  // face, so turning each estimated normal away from the centre gets them wrong; they must face
+  // outwards like the rest, found through the edges they share with their neighbours.
+  const LabelledSample bracket = partialLBracket();
+  auto seg = makePlanarSegmenter<pcl::PointXYZ>(GetParam());
+  seg->setInputCloud(test::withoutNormals(*bracket.cloud));
+  PlanarSegmentation result;
+  seg->segment(result);
+  ASSERT_TRUE(seg->prepared().normals_estimated);
+  const test::PlaneRecovery r = test::scoreRecovery(bracket, result);
+  EXPECT_GE(r.found, 6);
+  EXPECT_EQ(r.facing_inwards, 0);
+}
+
 TEST_P(EveryBackend, RepeatedPointsShareTheirOriginalsLabel) {
   // Every point of the box ten times, the copies spread through the cloud (as when a scan
   // is merged with itself): the copies would fill each k-nearest neighbourhood; the result must be

@@ -167,6 +167,9 @@ void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector
     }
   }
   prepared.normals_estimated = !missing.empty();
+  prepared.estimated_normal.assign(points.size(), 0);
+  for (const int i : missing) prepared.estimated_normal[static_cast<std::size_t>(i)] = 1;
+  prepared.oriented_towards_viewpoint = options.viewpoint.has_value();
   if (missing.empty() || prepared.collinear) {
     for (const int i : missing) {
       points[static_cast<std::size_t>(i)].getNormalVector3fMap().setZero();
@@ -225,6 +228,8 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
     std::vector<int> members;
   };
   std::vector<Fitted> fitted;
+  std::vector<Plane> working_planes;
+  std::vector<std::vector<int>> working_members;
   for (auto& group : groups) {
     if (group.size() < min_points) continue;
     Plane plane;
@@ -241,8 +246,13 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
       votes += c > 1e-6 ? 1 : (c < -1e-6 ? -1 : 0);
     }
     if (votes < 0 || (votes == 0 && plane.offset > 0)) plane = plane.flipped();
-    fitted.push_back({prepared.normalization.applyInverse(plane), std::move(group)});
+    working_planes.push_back(plane);
+    working_members.push_back(std::move(group));
   }
+  if (prepared.normals_estimated && !prepared.oriented_towards_viewpoint)
+    orientEstimatedSegments(prepared, working_members, working_planes);
+  for (std::size_t s = 0; s < working_planes.size(); ++s)
+    fitted.push_back({prepared.normalization.applyInverse(working_planes[s]), std::move(working_members[s])});
   std::stable_sort(fitted.begin(), fitted.end(),
                    [](const Fitted& a, const Fitted& b) { return a.members.size() > b.members.size(); });
 

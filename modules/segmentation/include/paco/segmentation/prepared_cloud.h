@@ -41,6 +41,10 @@ struct PreparedCloud {
   std::size_t input_size = 0;
   /// True when at least one normal was estimated rather than given.
   bool normals_estimated = false;
+  /// For each working point, 1 when its normal was estimated rather than given.
+  std::vector<char> estimated_normal;
+  /// True when estimated normals were turned towards a viewpoint the user gave.
+  bool oriented_towards_viewpoint = false;
   /// True when all points are collinear: no plane can be segmented.
   bool collinear = false;
   /// Kd-tree (FLANN) over `points`.
@@ -76,9 +80,25 @@ void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector
 /// Turns per-working-point labels into the user's PlanarSegmentation: drops segments with fewer
 /// than `min_points` points (at least 3) or no unique plane, fits every plane by least squares in
 /// the working frame and maps it back to the user frame, orients it with the majority of its
-/// point normals, and sorts the segments by decreasing size.
+/// point normals (or, when they were estimated, by orientEstimatedSegments), and sorts the
+/// segments by decreasing size.
 PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std::vector<int>& labels,
                                         std::size_t min_points);
+
+/// Orients the planes of segments whose normals were mostly estimated (working frame). An
+/// estimated normal only knows its line; turning each away from the box centre gets the faces of
+/// steps, notches and pockets wrong whenever they lie on the centre's far side. Instead:
+/// - neighbouring segments are oriented consistently across the edge they share: at a convex edge
+///   each one's points lie behind the other's plane, at a concave edge in front of it; adjacent
+///   near-coplanar segments face alike (near-parallel ones with an offset tell nothing and are
+///   skipped);
+/// - the best-supported relations (most neighbouring point pairs) join segments into groups;
+/// - each group as a whole then faces like the given normals it holds, or else away from the box
+///   centre by a majority of its points, which the outer hull of a part dominates.
+/// Segments whose points mostly had given normals keep their orientation. `members` holds the
+/// working points of each segment, `planes` their planes, oriented in place.
+void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<std::vector<int>>& members,
+                             std::vector<Plane>& planes);
 
 /// Least-squares plane of some working points (throws InvalidInputError when degenerate).
 Plane fitPlane(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& indices);
