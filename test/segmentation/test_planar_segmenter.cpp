@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <set>
 #include <string>
 
@@ -95,6 +96,47 @@ TEST_P(EveryBackend, PlanesWithEstimatedNormalsFaceOutwardsAlsoInAConcaveCorner)
   const test::PlaneRecovery r = test::scoreRecovery(bracket, result);
   EXPECT_GE(r.found, 6);
   EXPECT_EQ(r.facing_inwards, 0);
+}
+
+TEST_P(EveryBackend, NoisyBoxWithoutNormalsTakesNormalsFromMoreNeighbours) {
+  // Noise of 1 % of the diagonal on every coordinate, about a third of the point spacing: from
+  // 20 neighbours the estimated normals tilt so much that few points fit their face's plane.
+  LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1.0, 0.8, 0.6}), 3000, 12);
+  const double diagonal = std::sqrt(1.0 + 0.64 + 0.36);
+  std::mt19937 rng(5);
+  std::normal_distribution<float> noise(0.0f, static_cast<float>(0.01 * diagonal));
+  for (auto& p : *box.cloud)
+    for (int a = 0; a < 3; ++a) p.getVector3fMap()[a] += noise(rng);
+  auto seg = makePlanarSegmenter<pcl::PointXYZ>(GetParam());
+  seg->setInputCloud(test::withoutNormals(*box.cloud));
+  PlanarSegmentation result;
+  seg->segment(result);
+  EXPECT_EQ(seg->prepared().normal_neighbours_used, 40);
+  // With the inlier band far below the noise, a segment holds only part of its face, so faces
+  // are matched by plane: each needs a segment within 5 degrees, facing outwards, and within
+  // 3 % of the diagonal (three times the noise).
+  for (std::size_t f = 0; f < box.plane_normals.size(); ++f) {
+    const Eigen::Vector3d& outward = box.plane_normals[f];
+    double face_offset = 0.0;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < box.labels.size(); ++i)
+      if (box.labels[i] == static_cast<int>(f)) {
+        face_offset -= outward.dot((*box.cloud)[i].getVector3fMap().cast<double>());
+        ++count;
+      }
+    face_offset /= static_cast<double>(count);
+    bool matched = false;
+    for (const auto& plane : result.planes)
+      matched |= plane.normal.dot(outward) > std::cos(5.0 * M_PI / 180.0) &&
+                 std::abs(plane.offset - face_offset) < 0.03 * diagonal;
+    EXPECT_TRUE(matched) << "face " << f << " normal " << outward.transpose() << " offset " << face_offset;
+  }
+
+  // The same box without noise keeps the segmenter's 20.
+  auto clean = makePlanarSegmenter<pcl::PointXYZ>(GetParam());
+  clean->setInputCloud(test::withoutNormals(*cleanBox().cloud));
+  clean->segment(result);
+  EXPECT_EQ(clean->prepared().normal_neighbours_used, 20);
 }
 
 TEST_P(EveryBackend, RepeatedPointsShareTheirOriginalsLabel) {

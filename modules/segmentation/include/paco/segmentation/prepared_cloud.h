@@ -43,6 +43,9 @@ struct PreparedCloud {
   bool normals_estimated = false;
   /// For each working point, 1 when its normal was estimated rather than given.
   std::vector<char> estimated_normal;
+  /// Neighbours the estimated normals were taken from: the segmenter's k, or twice it when the
+  /// points are noisy for that k (median surface variation above 0.045); 0 when none was estimated.
+  int normal_neighbours_used = 0;
   /// True when estimated normals were turned towards a viewpoint the user gave.
   bool oriented_towards_viewpoint = false;
   /// True when all points are collinear: no plane can be segmented.
