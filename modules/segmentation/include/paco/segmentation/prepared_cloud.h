@@ -95,7 +95,8 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
 ///   each one's points lie behind the other's plane, at a concave edge in front of it; adjacent
 ///   near-coplanar segments face alike (near-parallel ones with an offset tell nothing and are
 ///   skipped);
-/// - the best-supported relations (most neighbouring point pairs) join segments into groups;
+/// - the best-supported relations (most points near the edge that tell) join segments into
+///   groups; one that would close a loop is left out;
 /// - each group as a whole then faces like the given normals it holds, or else away from the box
 ///   centre by a majority of its points, which the outer hull of a part dominates.
 /// Segments whose points mostly had given normals keep their orientation. `members` holds the
