@@ -99,7 +99,7 @@ TEST_P(EveryBackend, PlanesWithEstimatedNormalsFaceOutwardsAlsoInAConcaveCorner)
 }
 
 TEST_P(EveryBackend, NoisyBoxWithoutNormalsTakesNormalsFromMoreNeighbours) {
-  // Noise of 1 % of the diagonal on every coordinate, about a third of the point spacing: from
+  // Noise of 1 % of the diagonal on every coordinate, about 40 % of the point spacing: from
   // 20 neighbours the estimated normals tilt so much that few points fit their face's plane.
   LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1.0, 0.8, 0.6}), 3000, 12);
   const double diagonal = std::sqrt(1.0 + 0.64 + 0.36);
