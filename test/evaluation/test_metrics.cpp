@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 namespace ev = paco::evaluation;
 using paco::test::makeBox;
@@ -72,6 +73,35 @@ TEST(Metrics, UnitCubesShiftedAlongXMatchTheHandDerivation) {
   EXPECT_NEAR(m.normal_consistency, (6.0 - 8.0 * d + 4.0 * d * d) / 6.0, 0.015);
   EXPECT_TRUE(m.closed);
   EXPECT_NEAR(m.volume_ratio, 1.0, 1e-12);
+  // Each half of CD is d/3 + 2d^3/9 (the two directions are symmetric here).
+  for (double half : {m.chamfer_pred_to_gt, m.chamfer_gt_to_pred}) {
+    EXPECT_GE(half, cd / 2.0 * to_report - 1e-4);
+    EXPECT_LE(half, (cd / 2.0 + 0.005) * to_report);
+  }
+  EXPECT_NEAR(m.chamfer_pred_to_gt + m.chamfer_gt_to_pred, m.chamfer, 1e-9);
+}
+
+TEST(Metrics, TheHalvesOfChamferTellExtraSurfaceFromMissedSurface) {
+  // The prediction is the GT cube [0,1]^3 plus a second unit cube at x in [2,3]. Every GT point
+  // lies on the prediction (GT->pred: only the sampling gap, < 0.01). Half the prediction's area
+  // is the far cube, whose points are x - 1 from the GT: 1 on its face x=2, 2 on x=3, 1.5 on
+  // average on its 4 side faces, 1.5 over the cube; so pred->GT = 0.75 (the far cube's share of
+  // 50,000 samples is 0.5 +- 0.007 at 3 sigma: +-0.011).
+  paco::SurfaceMesh prediction = makeBox({0, 0, 0}, {1, 1, 1});
+  const paco::SurfaceMesh far_cube = makeBox({2, 0, 0}, {3, 1, 1});
+  const auto offset = static_cast<std::uint32_t>(prediction.vertices.size());
+  prediction.vertices.insert(prediction.vertices.end(), far_cube.vertices.begin(), far_cube.vertices.end());
+  for (auto face : far_cube.faces) {
+    for (auto& v : face) v += offset;
+    prediction.faces.push_back(face);
+  }
+  ev::MetricOptions options;
+  options.num_samples = 50000;
+  const ev::MeshMetrics m = ev::evaluateMesh(prediction, makeBox({0, 0, 0}, {1, 1, 1}), options);
+  const double to_report = 100.0 / std::sqrt(3.0);
+  EXPECT_NEAR(m.chamfer_pred_to_gt, 0.75 * to_report, 0.015 * to_report);
+  EXPECT_LT(m.chamfer_gt_to_pred, 0.01 * to_report);
+  EXPECT_NEAR(m.chamfer_pred_to_gt + m.chamfer_gt_to_pred, m.chamfer, 1e-9);
 }
 
 TEST(Metrics, DistancesScaleWithTheReferenceDiagonalOnlyWhenNormalizing) {

@@ -76,6 +76,8 @@ TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
   a.nc_prim = 0.9;
   a.unmatched_predicted = 2;
   a.message = "3 boundary edges";
+  a.chamfer_pred_to_gt = 2.5;
+  a.chamfer_gt_to_pred = 3.5;
   const ev::EvaluationRecord b = record("oracle", "p2", 0, ev::FailureReason::None, 1.61, 3.45, 0.957);
   {
     std::ofstream out(path);
@@ -91,6 +93,8 @@ TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
   EXPECT_EQ(records[0].part, a.part);
   EXPECT_EQ(records[0].reason, ev::FailureReason::NotClosed);
   EXPECT_DOUBLE_EQ(records[0].chamfer, 6.0);
+  EXPECT_DOUBLE_EQ(records[0].chamfer_pred_to_gt, 2.5);
+  EXPECT_DOUBLE_EQ(records[0].chamfer_gt_to_pred, 3.5);
   EXPECT_DOUBLE_EQ(records[0].nc_prim, 0.9);
   EXPECT_EQ(records[0].unmatched_predicted, 2);
   EXPECT_EQ(records[0].message, a.message);

@@ -94,9 +94,7 @@ EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_
   if (r.reason == FailureReason::None) {
     try {
       const MeshMetrics m = evaluateMesh(out.mesh, gt_mesh, options.metrics);
-      r.chamfer = m.chamfer;
-      r.hausdorff = m.hausdorff;
-      r.normal_consistency = m.normal_consistency;
+      r.setScores(m);
       r.num_faces = m.num_faces;
       r.num_vertices = m.num_vertices;
       r.volume_ratio = m.volume_ratio;
@@ -106,9 +104,7 @@ EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_
     }
   }
   if (r.failed()) {
-    r.chamfer = failure_score.chamfer;
-    r.hausdorff = failure_score.hausdorff;
-    r.normal_consistency = failure_score.normal_consistency;
+    r.setScores(failure_score);
     r.num_faces = r.num_vertices = 0;
     if (r.message.empty() && out.has_mesh) r.message = analyseTopology(out.mesh).describe();
   }
@@ -250,9 +246,7 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
           if (crashed.count(key)) {
             r.reason = FailureReason::Threw;
             r.message = "this case killed an earlier evaluation process (e.g. an assertion in a solver); recorded as failed";
-            r.chamfer = failure_score.chamfer;
-            r.hausdorff = failure_score.hausdorff;
-            r.normal_consistency = failure_score.normal_consistency;
+            r.setScores(failure_score);
           } else {
             {
               std::lock_guard<std::mutex> lock(mutex);
@@ -267,9 +261,7 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
           // Whatever went wrong, this case fails and the run goes on.
           r.reason = FailureReason::Threw;
           r.message = e.what();
-          r.chamfer = failure_score.chamfer;
-          r.hausdorff = failure_score.hausdorff;
-          r.normal_consistency = failure_score.normal_consistency;
+          r.setScores(failure_score);
         }
         std::lock_guard<std::mutex> lock(mutex);
         appendRecord(csv, r);

@@ -84,6 +84,8 @@ SurfaceDistances compareSamples(const SurfaceSample& predicted, const SurfaceSam
   const Directed forward = directed(predicted, reference, reference_tree);
   const Directed backward = directed(reference, predicted, predicted_tree);
   SurfaceDistances d;
+  d.chamfer_pred_to_gt = forward.mean_distance;
+  d.chamfer_gt_to_pred = backward.mean_distance;
   d.chamfer = forward.mean_distance + backward.mean_distance;
   d.hausdorff = std::max(forward.max_distance, backward.max_distance);
   d.normal_consistency = 0.5 * (forward.mean_normal_agreement + backward.mean_normal_agreement);
@@ -112,6 +114,8 @@ MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& refere
 
   MeshMetrics m;
   m.chamfer = d.chamfer * options.distance_scale;
+  m.chamfer_pred_to_gt = d.chamfer_pred_to_gt * options.distance_scale;
+  m.chamfer_gt_to_pred = d.chamfer_gt_to_pred * options.distance_scale;
   m.hausdorff = d.hausdorff * options.distance_scale;
   m.normal_consistency = d.normal_consistency;
   m.num_faces = predicted.faces.size();

@@ -75,7 +75,7 @@ double parseNumber(const std::string& text) {
 
 const char* kFixedColumns[] = {"method", "assembler", "part", "level", "view", "status", "reason",
                                "cd", "hd", "nc", "nc_prim", "unmatched_pred", "faces", "vertices",
-                               "closed", "volume_ratio"};
+                               "closed", "volume_ratio", "cd_pred_to_gt", "cd_gt_to_pred"};
 constexpr std::size_t kNumFixed = sizeof(kFixedColumns) / sizeof(kFixedColumns[0]);
 
 double mean(const std::vector<double>& v) {
@@ -151,10 +151,10 @@ std::string table(const std::vector<EvaluationRecord>& records) {
   std::stable_partition(order.begin(), order.end(), [](const auto& k) { return k.first != "sanity"; });
 
   std::ostringstream md;
-  md << "| Method | Assembler | N | FR % | CD | HD | NC | NC_prim | unmatched pred | CD closed | HD closed | "
+  md << "| Method | Assembler | N | FR % | CD | CD pred→GT / GT→pred | HD | NC | NC_prim | unmatched pred | CD closed | HD closed | "
         "vol. ratio (median) | #f | #v | failures by reason |";
   for (const auto& s : stages) md << " t " << s << " (s) |";
-  md << " t total (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+  md << " t total (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
   for (std::size_t i = 0; i < stages.size(); ++i) md << "---|";
   md << "---|\n";
   for (const auto& k : order) {
@@ -166,7 +166,8 @@ std::string table(const std::vector<EvaluationRecord>& records) {
     }
     if (reasons.empty()) reasons = "–";
     md << "| " << k.first << " | " << k.second << " | " << s.count << " | " << cell(s.failureRate(), 1) << " | "
-       << cell(s.chamfer, 2) << " | " << cell(s.hausdorff, 2) << " | " << cell(s.normal_consistency, 3) << " | "
+       << cell(s.chamfer, 2) << " | " << cell(s.chamfer_pred_to_gt, 2) << " / " << cell(s.chamfer_gt_to_pred, 2)
+       << " | " << cell(s.hausdorff, 2) << " | " << cell(s.normal_consistency, 3) << " | "
        << cell(s.nc_prim, 3) << " | " << cell(s.unmatched_predicted, 1) << " | " << cell(s.closed_chamfer, 2) << " | "
        << cell(s.closed_hausdorff, 2) << " | " << cell(s.volume_ratio_median, 3) << " | "
        << (s.failures < s.count ? cell(s.faces, 1) : "–") << " | "
@@ -241,6 +242,14 @@ std::string EvaluationRecord::key() const {
   return method + "|" + assembler + "|" + part + "|" + std::to_string(level) + "|" + std::to_string(view);
 }
 
+void EvaluationRecord::setScores(const MeshMetrics& metrics) {
+  chamfer = metrics.chamfer;
+  chamfer_pred_to_gt = metrics.chamfer_pred_to_gt;
+  chamfer_gt_to_pred = metrics.chamfer_gt_to_pred;
+  hausdorff = metrics.hausdorff;
+  normal_consistency = metrics.normal_consistency;
+}
+
 const std::vector<std::string>& stageNames() {
   static const std::vector<std::string> names = {"segment",  "complete", "fuse",     "prior", "reconstruct",
                                                  "simplify", "assemble", "evaluate", "total"};
@@ -260,7 +269,8 @@ void appendRecord(std::ostream& out, const EvaluationRecord& r) {
       << formatNumber(r.hausdorff, 9) << ',' << formatNumber(r.normal_consistency, 9) << ','
       << (r.nc_prim < 0 ? std::string() : formatNumber(r.nc_prim, 9)) << ','
       << (r.unmatched_predicted < 0 ? std::string() : std::to_string(r.unmatched_predicted)) << ',' << r.num_faces
-      << ',' << r.num_vertices << ',' << (r.failed() ? 0 : 1) << ',' << formatNumber(r.volume_ratio, 9);
+      << ',' << r.num_vertices << ',' << (r.failed() ? 0 : 1) << ',' << formatNumber(r.volume_ratio, 9) << ','
+      << formatNumber(r.chamfer_pred_to_gt, 9) << ',' << formatNumber(r.chamfer_gt_to_pred, 9);
   for (const auto& s : stageNames()) {
     auto it = r.seconds.find(s);
     out << ',' << (it == r.seconds.end() ? std::string() : formatNumber(it->second, 6));
@@ -312,6 +322,8 @@ std::vector<EvaluationRecord> readRecords(const std::string& path, std::size_t* 
       r.num_faces = static_cast<std::size_t>(std::stoull(f[12]));
       r.num_vertices = static_cast<std::size_t>(std::stoull(f[13]));
       r.volume_ratio = parseNumber(f[15]);
+      r.chamfer_pred_to_gt = parseNumber(f[16]);
+      r.chamfer_gt_to_pred = parseNumber(f[17]);
       for (std::size_t i = 0; i < stageNames().size(); ++i)
         if (!f[kNumFixed + i].empty()) r.seconds[stageNames()[i]] = parseNumber(f[kNumFixed + i]);
       r.message = f.back();
@@ -326,10 +338,12 @@ std::vector<EvaluationRecord> readRecords(const std::string& path, std::size_t* 
 Summary summarize(const std::vector<EvaluationRecord>& records) {
   Summary s;
   s.count = records.size();
-  std::vector<double> cd, hd, nc, prim, unmatched, ccd, chd, faces, vertices, volume;
+  std::vector<double> cd, cd_pred_to_gt, cd_gt_to_pred, hd, nc, prim, unmatched, ccd, chd, faces, vertices, volume;
   std::map<std::string, std::vector<double>> times;
   for (const auto& r : records) {
     cd.push_back(r.chamfer);
+    cd_pred_to_gt.push_back(r.chamfer_pred_to_gt);
+    cd_gt_to_pred.push_back(r.chamfer_gt_to_pred);
     hd.push_back(r.hausdorff);
     nc.push_back(r.normal_consistency);
     if (r.nc_prim >= 0) prim.push_back(r.nc_prim);
@@ -348,6 +362,8 @@ Summary summarize(const std::vector<EvaluationRecord>& records) {
   }
   const auto orMinus = [](double v) { return std::isnan(v) ? -1.0 : v; };
   s.chamfer = orMinus(mean(cd));
+  s.chamfer_pred_to_gt = orMinus(mean(cd_pred_to_gt));
+  s.chamfer_gt_to_pred = orMinus(mean(cd_gt_to_pred));
   s.hausdorff = orMinus(mean(hd));
   s.normal_consistency = orMinus(mean(nc));
   s.nc_prim = orMinus(mean(prim));

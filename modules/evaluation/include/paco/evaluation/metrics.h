@@ -34,6 +34,8 @@ struct MetricOptions {
 /// CD, HD and NC between two sampled surfaces, in the units of the samples (no scaling).
 struct SurfaceDistances {
   double chamfer = 0.0;             ///< mean NN distance pred->GT plus mean NN distance GT->pred
+  double chamfer_pred_to_gt = 0.0;  ///< mean NN distance pred->GT: surface the prediction has where the GT has none
+  double chamfer_gt_to_pred = 0.0;  ///< mean NN distance GT->pred: GT surface the prediction misses
   double hausdorff = 0.0;           ///< max of the two directed Hausdorff distances
   double normal_consistency = 1.0;  ///< mean |n_pred . n_gt| at nearest neighbours, both directions averaged
 };
@@ -45,6 +47,9 @@ SurfaceDistances compareSamples(const SurfaceSample& predicted, const SurfaceSam
 /// Everything measured on one predicted mesh against its ground truth.
 struct MeshMetrics {
   double chamfer = 0.0;             ///< CD, x distance_scale, in the GT's normalised frame
+  /// The two halves of CD (x distance_scale): they tell extra surface (pred->GT) from missed
+  /// surface (GT->pred), which CD alone does not.
+  double chamfer_pred_to_gt = 0.0, chamfer_gt_to_pred = 0.0;
   double hausdorff = 0.0;           ///< HD, x distance_scale, in the GT's normalised frame
   double normal_consistency = 0.0;  ///< NC in [0, 1]
   std::size_t num_faces = 0;        ///< polygon faces of the prediction (#f)

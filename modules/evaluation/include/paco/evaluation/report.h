@@ -4,6 +4,7 @@
 //   paco::evaluation::appendRecord(csv_stream, r);                      // header: csvHeader()
 //   std::string md = paco::evaluation::markdownReport(paco::evaluation::readRecords("eval.csv"));
 #include <paco/common/surface_mesh.h>
+#include <paco/evaluation/metrics.h>
 
 #include <cstddef>
 #include <limits>
@@ -46,6 +47,8 @@ struct EvaluationRecord {
   int view = 0;                ///< view index
   FailureReason reason = FailureReason::None;  ///< None: succeeded
   double chamfer = 0.0;        ///< CD x 100 (the box's score when failed)
+  double chamfer_pred_to_gt = 0.0;  ///< CD's half from the prediction to the GT, x 100
+  double chamfer_gt_to_pred = 0.0;  ///< CD's half from the GT to the prediction, x 100
   double hausdorff = 0.0;      ///< HD x 100
   double normal_consistency = 0.0;  ///< NC
   double nc_prim = -1.0;       ///< NC_prim of the primitives given to the assembler; < 0: not applicable
@@ -58,6 +61,8 @@ struct EvaluationRecord {
   std::string message;         ///< why it failed, or empty
 
   bool failed() const { return reason != FailureReason::None; }
+  /// Takes CD (and its halves), HD and NC from `metrics`.
+  void setScores(const MeshMetrics& metrics);
   /// The resume key: method|assembler|part|level|view.
   std::string key() const;
 };
@@ -79,6 +84,7 @@ struct Summary {
   std::size_t failures = 0;
   std::map<FailureReason, std::size_t> failures_by_reason;
   double chamfer = 0.0, hausdorff = 0.0, normal_consistency = 0.0;  ///< means over all cases
+  double chamfer_pred_to_gt = 0.0, chamfer_gt_to_pred = 0.0;         ///< means over all cases
   double nc_prim = -1.0;             ///< mean over the cases where it applies; < 0: none
   double unmatched_predicted = -1.0; ///< mean; < 0: not applicable
   double closed_chamfer = -1.0, closed_hausdorff = -1.0;  ///< means over the succeeded cases; < 0: none
