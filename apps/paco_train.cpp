@@ -45,6 +45,7 @@ struct Options {
   bool resume = false;
   std::uint64_t seed = 1;
   std::vector<std::string> disabled_losses;
+  bool quality_classification = false;
   std::string input_frame = "complete";
   std::string input_orientation = "as-is";
   double augment_scale = 0.0, augment_offset = 0.0, augment_jitter = 0.0;
@@ -117,6 +118,9 @@ int run(int argc, char** argv) {
        "start a new run from the weights (and network configuration) of this model, e.g. models/paco_cpu.pt")
       ("seed", po::value(&o.seed)->default_value(o.seed), "seed of weight init, data order and re-sampling")
       ("disable-loss", po::value(&o.disabled_losses)->multitoken(), "switch loss terms off (ablations)")
+      ("quality-classification", po::bool_switch(&o.quality_classification),
+       "a matched prediction learns confidence 1 only when its plane is within 10 deg and 0.05 of its GT "
+       "plane (paco::completion::LossConfig::quality_classification); default: every matched one, as the paper")
       ("input-frame", po::value(&o.input_frame)->default_value(o.input_frame),
        "complete: the dataset's complete-shape frame (paper); own: re-normalise each input by its own box")
       ("input-orientation", po::value(&o.input_orientation)->default_value(o.input_orientation),
@@ -178,6 +182,7 @@ int run(int argc, char** argv) {
   else options.model = paco::ModelConfig::preset(o.preset);
   options.model.validate();
   for (const auto& name : o.disabled_losses) options.loss.disable(name);
+  options.loss.quality_classification = o.quality_classification;
   options.epochs = o.epochs;
   options.batch_size = o.batch;
   options.learning_rate = o.lr;

@@ -4,7 +4,7 @@
 # (the dataset build and the training both resume).
 #
 #   scripts/train-model.sh WORK_DIR [--init-from MODEL.pt] [--epochs N] [--seed S] [--jitter J]
-#                          [--orientation as-is|seen-planes] [--run NAME]
+#                          [--orientation as-is|seen-planes] [--run NAME] [-- PACO_TRAIN_OPTIONS...]
 #
 # --init-from starts a new run from a model's weights (e.g. models/paco_cpu.pt, to go on training
 # the shipped model on a machine that kept nothing else); without it a new run starts from random
@@ -12,7 +12,8 @@
 # --seed changes the training order and augmentation (not the data set); --jitter adds Gaussian
 # noise to the training inputs (paco_train --augment-jitter); --orientation is paco_train's
 # --input-orientation (default: the starting model's, else as-is); --run names the run folder
-# under WORK_DIR (default: run).
+# under WORK_DIR (default: run). Options after "--" go to paco_train as they are (e.g.
+# --quality-classification --lr 5e-5 --limit-train 16000); pass them again when resuming.
 # Needs the MFCAD meshes in ../shared/data/mfcad (or MFCAD_DIR) and a Release build in build/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,6 +38,7 @@ while [ $# -gt 0 ]; do
     --jitter) jitter=$2; shift 2 ;;
     --orientation) orientation=$2; shift 2 ;;
     --run) run_name=$2; shift 2 ;;
+    --) shift; break ;;
     *) echo "train-model.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
@@ -79,6 +81,7 @@ args=("$work/data" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 
 if [ -n "$orientation" ]; then
   args+=(--input-orientation "$orientation")
 fi
+args+=("$@")
 if [ -e "$run/last.pt" ]; then
   args+=(--resume)
 elif [ -n "$init_from" ]; then

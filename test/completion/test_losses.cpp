@@ -145,6 +145,29 @@ TEST(Losses, KnownOffsetsGiveKnownValues) {
   EXPECT_NEAR(r.terms.at("overall_chamfer"), 20.0 * (0.5 * 0.01 + 0.5 * 0.01), 1e-5);
 }
 
+TEST(Losses, QualityClassificationGivesAFarMatchedPlaneTheEmptyTarget) {
+  Scene s = makeScene();
+  // Predicted plane 1 stays matched to GT plane 1 (z = 0.5) but lies 0.1 above it, beyond
+  // quality_offset (0.05); predicted plane 2 is exact.
+  s.output.offsets[0][1] = 0.6f;
+  s.output.points[0][1].select(1, 2).fill_(0.6f);
+  LossConfig config;
+  config.ranking = false;
+  config.quality_classification = true;
+  const LossResult r = computeLosses(s.output, s.truth, config);
+  ASSERT_EQ(r.matching[0], (std::vector<int>{2, 1}));
+  // Over 2 GT planes: 2 to "plane"; 1 (too far) and 0 (unmatched) to "empty" with weight 0.4.
+  const double cls =
+      (-std::log(sigmoid(0.5)) - 0.4 * std::log(1.0 - sigmoid(2.0)) - 0.4 * std::log(1.0 - sigmoid(-1.0))) / 2.0;
+  EXPECT_NEAR(r.terms.at("classification"), cls, 1e-5);
+  // Within the tolerance (0.04 off) it is a plane again, as without the option.
+  s.output.offsets[0][1] = 0.54f;
+  const LossResult near = computeLosses(s.output, s.truth, config);
+  const double cls_near =
+      (-std::log(sigmoid(2.0)) - std::log(sigmoid(0.5)) - 0.4 * std::log(1.0 - sigmoid(-1.0))) / 2.0;
+  EXPECT_NEAR(near.terms.at("classification"), cls_near, 1e-5);
+}
+
 TEST(Losses, GradientOfTotalFlowsToEveryHead) {
   Scene s = makeScene();
   s.output.normals = s.output.normals.clone().set_requires_grad(true);

@@ -238,7 +238,18 @@ LossResult computeLosses(const NetworkOutput& output, const GroundTruthBatch& tr
 
   if (config.classification) {
     auto target = torch::zeros({B * M}, output.logits.options());
-    if (any_match) target.index_fill_(0, pred_index, 1.0);
+    if (any_match && config.quality_classification) {
+      torch::NoGradGuard no_grad;
+      const auto n = output.normals.reshape({B * M, 3}).index_select(0, pred_index);
+      const auto gt_n = truth.normals.reshape({B * Pmax, 3}).index_select(0, gt_index);
+      const auto r = output.offsets.reshape({B * M}).index_select(0, pred_index);
+      const auto gt_r = truth.offsets.reshape({B * Pmax}).index_select(0, gt_index);
+      const double min_cosine = std::cos(config.quality_angle_deg * kPi / 180.0);
+      const auto good = ((n * gt_n).sum(-1) > min_cosine).logical_and((r - gt_r).abs() < config.quality_offset);
+      target.index_put_({pred_index}, good.to(target.dtype()));
+    } else if (any_match) {
+      target.index_fill_(0, pred_index, 1.0);
+    }
     const auto weight = target + config.empty_weight * (1.0 - target);
     const auto ce = torch::binary_cross_entropy_with_logits(output.logits.reshape({B * M}), target, weight,
                                                             {}, at::Reduction::Sum);

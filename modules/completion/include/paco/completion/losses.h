@@ -23,6 +23,15 @@ struct LossConfig {
   bool classification = true;     ///< BCE plane/empty on every prediction
   double classification_weight = 1.0;
   double empty_weight = 0.4;      ///< weight of the "empty" target, in [0, 1]
+  /// A matched prediction's classification target is 1 only when its plane lies within
+  /// quality_angle_deg and quality_offset of the GT plane it was matched to; otherwise 0, with the
+  /// empty target's weight. Off (the paper's target): every matched prediction gets 1, so a query
+  /// matched to an unseen plane that the network cannot place still learns high confidence, and
+  /// the network hedges: averaged planes through the part's centre at confidence 0.8-0.9, which
+  /// the confidence threshold cannot tell from right ones (doc/results.md).
+  bool quality_classification = false;
+  double quality_angle_deg = 10.0;
+  double quality_offset = 0.05;   ///< normalised units
   bool normal = true;             ///< ‖n̂−n‖² + cosine_weight·(1−cos) on matched pairs
   double normal_weight = 1.0;
   double cosine_weight = 1.0;     ///< λ of the paper's normal loss
