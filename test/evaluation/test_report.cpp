@@ -56,6 +56,8 @@ ev::EvaluationRecord record(const std::string& method, const std::string& part, 
   r.level = level;
   r.reason = reason;
   r.chamfer = cd;
+  r.chamfer_pred_to_gt = 0.4 * cd;
+  r.chamfer_gt_to_pred = 0.6 * cd;
   r.hausdorff = hd;
   r.normal_consistency = nc;
   if (reason == ev::FailureReason::None) {
@@ -120,6 +122,8 @@ TEST(Summary, FailureRateClosedOnlyFiguresAndReasons) {
   EXPECT_EQ(s.failures, 2u);
   EXPECT_DOUBLE_EQ(s.failureRate(), 50.0);
   EXPECT_DOUBLE_EQ(s.chamfer, 5.0);
+  EXPECT_DOUBLE_EQ(s.chamfer_pred_to_gt, 2.0);
+  EXPECT_DOUBLE_EQ(s.chamfer_gt_to_pred, 3.0);
   EXPECT_DOUBLE_EQ(s.hausdorff, 14.0);
   EXPECT_DOUBLE_EQ(s.normal_consistency, (0.9 + 0.8 + 0.75 + 0.7) / 4.0);
   EXPECT_DOUBLE_EQ(s.closed_chamfer, 3.0);
@@ -143,7 +147,7 @@ TEST(Markdown, OneTablePerLevelAndOverall) {
   EXPECT_EQ(md.find("## Moderate"), std::string::npos);
   EXPECT_NE(md.find("## Hard (75 % missing)"), std::string::npos);
   EXPECT_NE(md.find("## Overall"), std::string::npos);
-  EXPECT_NE(md.find("| direct | polyfit | 1 | 100.0 | 6.00 | 24.00 | 0.750 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| direct | polyfit | 1 | 100.0 | 6.00 | 2.40 / 3.60 | 24.00 | 0.750 |"), std::string::npos) << md;
   EXPECT_NE(md.find("no-mesh 1"), std::string::npos);
   EXPECT_NE(md.find("t assemble (s)"), std::string::npos);
   // The sanity row comes after the methods.
