@@ -50,6 +50,14 @@ Scene makeScene() {
   return s;
 }
 
+// The scene with predicted plane 1 (GT plane 1, z = 0.5) and its points moved to z.
+Scene makeSceneWithPlane1At(float z) {
+  Scene s = makeScene();
+  s.output.offsets[0][1] = z;
+  s.output.points[0][1].select(1, 2).fill_(z);
+  return s;
+}
+
 }  // namespace
 
 TEST(Losses, ChamferOfIdenticalSetsIsZero) {
@@ -131,10 +139,8 @@ TEST(Losses, TotalOfExactPredictionsIsClassificationPlusRepulsion) {
 }
 
 TEST(Losses, KnownOffsetsGiveKnownValues) {
-  Scene s = makeScene();
-  // Move predicted plane 1 (GT plane 1, z = 0.5) up by 0.1, points included.
-  s.output.offsets[0][1] = 0.6f;
-  s.output.points[0][1].select(1, 2).fill_(0.6f);
+  // Predicted plane 1 (GT plane 1, z = 0.5) moved up by 0.1, points included.
+  const Scene s = makeSceneWithPlane1At(0.6f);
   LossConfig config;
   config.ranking = false;
   const LossResult r = computeLosses(s.output, s.truth, config);
@@ -146,11 +152,9 @@ TEST(Losses, KnownOffsetsGiveKnownValues) {
 }
 
 TEST(Losses, QualityClassificationGivesAFarMatchedPlaneTheEmptyTarget) {
-  Scene s = makeScene();
   // Predicted plane 1 stays matched to GT plane 1 (z = 0.5) but lies 0.1 above it, beyond
   // quality_offset (0.05); predicted plane 2 is exact.
-  s.output.offsets[0][1] = 0.6f;
-  s.output.points[0][1].select(1, 2).fill_(0.6f);
+  Scene s = makeSceneWithPlane1At(0.6f);
   LossConfig config;
   config.ranking = false;
   config.quality_classification = true;

@@ -236,16 +236,21 @@ LossResult computeLosses(const NetworkOutput& output, const GroundTruthBatch& tr
     result.terms[name] = value.detach().item<double>();
   };
 
+  // The plane parameters of the matched pairs, predicted and GT, for the terms that compare them.
+  torch::Tensor n, gt_n, r, gt_r;
+  if (any_match) {
+    n = output.normals.reshape({B * M, 3}).index_select(0, pred_index);
+    gt_n = truth.normals.reshape({B * Pmax, 3}).index_select(0, gt_index);
+    r = output.offsets.reshape({B * M}).index_select(0, pred_index);
+    gt_r = truth.offsets.reshape({B * Pmax}).index_select(0, gt_index);
+  }
+
   if (config.classification) {
     auto target = torch::zeros({B * M}, output.logits.options());
     if (any_match && config.quality_classification) {
-      torch::NoGradGuard no_grad;
-      const auto n = output.normals.reshape({B * M, 3}).index_select(0, pred_index);
-      const auto gt_n = truth.normals.reshape({B * Pmax, 3}).index_select(0, gt_index);
-      const auto r = output.offsets.reshape({B * M}).index_select(0, pred_index);
-      const auto gt_r = truth.offsets.reshape({B * Pmax}).index_select(0, gt_index);
       const double min_cosine = std::cos(config.quality_angle_deg * kPi / 180.0);
-      const auto good = ((n * gt_n).sum(-1) > min_cosine).logical_and((r - gt_r).abs() < config.quality_offset);
+      const auto good = ((n.detach() * gt_n).sum(-1) > min_cosine)
+                            .logical_and((r.detach() - gt_r).abs() < config.quality_offset);
       target.index_put_({pred_index}, good.to(target.dtype()));
     } else if (any_match) {
       target.index_fill_(0, pred_index, 1.0);
@@ -255,16 +260,9 @@ LossResult computeLosses(const NetworkOutput& output, const GroundTruthBatch& tr
                                                             {}, at::Reduction::Sum);
     add("classification", config.classification_weight * plane_norm * ce);
   }
-  if (any_match && config.normal) {
-    const auto n = output.normals.reshape({B * M, 3}).index_select(0, pred_index);
-    const auto gt_n = truth.normals.reshape({B * Pmax, 3}).index_select(0, gt_index);
+  if (any_match && config.normal)
     add("normal", config.normal_weight * plane_norm * normalLoss(n, gt_n, config.cosine_weight).sum());
-  }
-  if (any_match && config.offset) {
-    const auto r = output.offsets.reshape({B * M}).index_select(0, pred_index);
-    const auto gt_r = truth.offsets.reshape({B * Pmax}).index_select(0, gt_index);
-    add("offset", config.offset_weight * plane_norm * (r - gt_r).abs().sum());
-  }
+  if (any_match && config.offset) add("offset", config.offset_weight * plane_norm * (r - gt_r).abs().sum());
   if (any_match && (config.plane_chamfer || config.overall_chamfer)) {
     // Nearest neighbours per sample without autograd, samples in parallel; then one gather per
     // term over the whole batch (same value and gradient as a chamfer per matched pair).
