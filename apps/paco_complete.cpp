@@ -35,6 +35,7 @@ const char kTool[] = "paco_complete";
 struct Options {
   std::string input, output, pcd, model;
   std::string segmenter = "gocopp";
+  int min_points = 0;
   double epsilon = 0.004;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
@@ -78,6 +79,7 @@ int run(int argc, char** argv) {
       ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch threads (0: one per hardware thread)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
   paco::app::addMaxPointsOption(visible, o.max_points);
+  paco::app::addMinPointsOption(visible, o.min_points);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -98,6 +100,7 @@ int run(int argc, char** argv) {
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
   paco::app::validateMaxPoints(o.max_points);
+  paco::app::validateMinPoints(o.min_points);
   o.fusion.validate();
   if (o.threads < 0) throw paco::app::UsageError("--threads must be >= 0");
 
@@ -156,6 +159,7 @@ int run(int argc, char** argv) {
       segmentation.planes[s] = paco::Plane::fit(members);
     }
   } else {
+    segmenter->setMinPointsPerPlane(paco::app::minPointsPerPlane(o.min_points, cloud->size()));
     segmenter->setInputCloud(cloud);
     segmenter->segment(segmentation);
   }

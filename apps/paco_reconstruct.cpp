@@ -37,6 +37,7 @@ struct Options {
   std::string input, output, vg_output, pcd_output;
   bool no_completion = false;
   std::string segmenter = "gocopp";
+  int min_points = 0;
   std::string model;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
@@ -90,6 +91,7 @@ int run(int argc, char** argv) {
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
   paco::app::addMaxPointsOption(visible, o.max_points);
+  paco::app::addMinPointsOption(visible, o.min_points);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -104,6 +106,7 @@ int run(int argc, char** argv) {
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
   paco::app::validateMaxPoints(o.max_points);
+  paco::app::validateMinPoints(o.min_points);
   o.fusion.validate();
   if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
   if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
@@ -142,11 +145,12 @@ int run(int argc, char** argv) {
 
   timer.start("segment");
   paco::PlanarSegmentation segmentation;
+  segmenter->setMinPointsPerPlane(paco::app::minPointsPerPlane(o.min_points, cloud->size()));
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();
-  std::printf("segment (%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(), segmentation.size(),
-              100.0 * segmentation.coverage());
+  std::printf("segment (%s, planes of >= %d points): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
+              segmenter->getMinPointsPerPlane(), segmentation.size(), 100.0 * segmentation.coverage());
   if (segmentation.empty())
     throw paco::InvalidInputError("'" + o.input + "': no planar segment found; is it a piecewise-planar object?");
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

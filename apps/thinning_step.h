@@ -3,6 +3,7 @@
 // thinned.
 #include "app_support.h"
 
+#include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/thinning.h>
 
 #include <boost/program_options.hpp>
@@ -18,6 +19,22 @@ namespace paco::app {
 inline void addMaxPointsOption(boost::program_options::options_description& options, std::size_t& max_points) {
   options.add_options()("max-points", boost::program_options::value(&max_points)->default_value(max_points),
                         "thin denser inputs to about this many evenly spread points before segmenting (0: keep all)");
+}
+
+inline void addMinPointsOption(boost::program_options::options_description& options, int& min_points) {
+  options.add_options()("min-points", boost::program_options::value(&min_points)->default_value(min_points),
+                        "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the working cloud's points, at least 3)");
+}
+
+inline void validateMinPoints(int min_points) {
+  if (min_points != 0 && min_points < 3)
+    throw UsageError("--min-points must be 0 (1.5 % of the points) or at least 3, got " + std::to_string(min_points));
+}
+
+/// The segmenter's fewest points per plane for the working cloud: --min-points, or by default
+/// paco::scanMinPointsPerPlane of its size.
+inline int minPointsPerPlane(int min_points, std::size_t cloud_points) {
+  return min_points > 0 ? min_points : scanMinPointsPerPlane(cloud_points);
 }
 
 inline void validateMaxPoints(std::size_t max_points) {

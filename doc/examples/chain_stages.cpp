@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
     auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>("gocopp");
     segmenter->setInputCloud(cloud);
     segmenter->setDistanceThreshold(0.004);  // fraction of the bounding-box diagonal
+    segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size()));  // as paco_reconstruct
     paco::PlanarSegmentation segmentation;
     segmenter->segment(segmentation);
     std::cout << "segments: " << segmentation.size() << "\n";

@@ -58,7 +58,7 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
                                             " --no-completion --assembler cell-complex",
                                         &log);
   ASSERT_EQ(rc, 0) << log;
-  EXPECT_NE(log.find("segment (gocopp)"), std::string::npos) << log;
+  EXPECT_NE(log.find("segment (gocopp, planes of >= "), std::string::npos) << log;
   EXPECT_NE(log.find("timing:"), std::string::npos) << log;
 
   const paco::SurfaceMesh mesh = paco::io::loadMesh(mesh_path);
@@ -218,6 +218,8 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--unseen-points must be in (0, 1]"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --max-points 100", &log), 2) << log;
   EXPECT_NE(log.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-points 2", &log), 2) << log;
+  EXPECT_NE(log.find("--min-points must be 0 (1.5 % of the points) or at least 3, got 2"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
   EXPECT_NE(log.find("--fill-box"), std::string::npos);

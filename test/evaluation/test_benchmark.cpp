@@ -122,6 +122,9 @@ TEST(Benchmark, BadOptionsAreErrors) {
   options.levels = {3};
   EXPECT_THROW(ev::runBenchmark(options), paco::InvalidInputError);
   options.levels = {0};
+  options.method.segment_min_points = 2;
+  EXPECT_THROW(ev::runBenchmark(options), paco::InvalidInputError);
+  options.method.segment_min_points = 0;
   EXPECT_THROW(ev::runBenchmark(options), paco::IoError);  // no dataset there
 }
 

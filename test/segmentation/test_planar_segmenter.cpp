@@ -172,6 +172,13 @@ TEST(PlanarSegmenter, DefaultBackendIsGoCoPP) {
   EXPECT_EQ(availablePlanarSegmenters().front(), "gocopp");
 }
 
+TEST(PlanarSegmenter, ScanMinimumIsAShareOfThePointsAndAtLeastThree) {
+  EXPECT_EQ(scanMinPointsPerPlane(2048), 31);    // 30.72, rounded
+  EXPECT_EQ(scanMinPointsPerPlane(20000), 300);
+  EXPECT_EQ(scanMinPointsPerPlane(100), 3);      // 1.5 points: a plane still needs 3
+  EXPECT_EQ(scanMinPointsPerPlane(0), 3);
+}
+
 TEST(PlanarSegmenter, UnknownBackendNameIsAClearError) {
   try {
     makePlanarSegmenter<pcl::PointXYZ>("hough");

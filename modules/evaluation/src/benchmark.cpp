@@ -36,6 +36,9 @@ void checkOptions(const BenchmarkOptions& options) {
   if (options.method.max_input_points != 0 && options.method.max_input_points < kMinInputPointBudget)
     throw InvalidInputError("runBenchmark: the input point budget must be 0 (keep all) or at least " +
                             std::to_string(kMinInputPointBudget));
+  if (options.method.segment_min_points != 0 && options.method.segment_min_points < 3)
+    throw InvalidInputError("runBenchmark: the fewest points of a plane must be 0 (a share of the input) or at least 3; got " +
+                            std::to_string(options.method.segment_min_points));
   const std::vector<std::string> available = availableMethods();
   for (const auto& m : options.methods) {
     if (std::find(available.begin(), available.end(), m) == available.end()) {

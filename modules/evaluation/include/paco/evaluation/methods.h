@@ -43,8 +43,12 @@ struct MethodOptions {
   /// PolyFit candidate-face budget (PolygonalAssembler::setMaxCandidateFaces, whose default this
   /// is; 0: none).
   std::size_t max_candidate_faces = 1000;
-  /// Planar segmenter backend for the visible points of `direct` and `box-prior` (default "gocopp").
+  /// Planar segmenter backend for the visible points of `direct`, `box-prior` and `paco`
+  /// (default "gocopp").
   std::string segmenter = "gocopp";
+  /// The segmenter's fewest points per plane (PlanarSegmenter::setMinPointsPerPlane): 0 (default)
+  /// for paco::scanMinPointsPerPlane of the input's points, as paco_reconstruct, else >= 3.
+  int segment_min_points = 0;
   /// Use the dataset's labels of the input points instead of running the segmenter (default
   /// false). The dataset's labels are GT face labels unless it was built with the segmenter.
   bool use_dataset_labels = false;
