@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <string>
