@@ -159,7 +159,7 @@ int run(int argc, char** argv) {
       segmentation.planes[s] = paco::Plane::fit(members);
     }
   } else {
-    segmenter->setMinPointsPerPlane(paco::app::minPointsPerPlane(o.min_points, cloud->size()));
+    segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
     segmenter->setInputCloud(cloud);
     segmenter->segment(segmentation);
   }

@@ -145,7 +145,7 @@ int run(int argc, char** argv) {
 
   timer.start("segment");
   paco::PlanarSegmentation segmentation;
-  segmenter->setMinPointsPerPlane(paco::app::minPointsPerPlane(o.min_points, cloud->size()));
+  segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();

@@ -31,12 +31,6 @@ inline void validateMinPoints(int min_points) {
     throw UsageError("--min-points must be 0 (1.5 % of the points) or at least 3, got " + std::to_string(min_points));
 }
 
-/// The segmenter's fewest points per plane for the working cloud: --min-points, or by default
-/// paco::scanMinPointsPerPlane of its size.
-inline int minPointsPerPlane(int min_points, std::size_t cloud_points) {
-  return min_points > 0 ? min_points : scanMinPointsPerPlane(cloud_points);
-}
-
 inline void validateMaxPoints(std::size_t max_points) {
   if (max_points != 0 && max_points < kMinPointBudget)
     throw UsageError("--max-points must be 0 (keep all) or at least " + std::to_string(kMinPointBudget));

@@ -177,6 +177,9 @@ TEST(PlanarSegmenter, ScanMinimumIsAShareOfThePointsAndAtLeastThree) {
   EXPECT_EQ(scanMinPointsPerPlane(20000), 300);
   EXPECT_EQ(scanMinPointsPerPlane(100), 3);      // 1.5 points: a plane still needs 3
   EXPECT_EQ(scanMinPointsPerPlane(0), 3);
+  // A requested count (--min-points) wins; 0 asks for the share.
+  EXPECT_EQ(scanMinPointsPerPlane(2048, 50), 50);
+  EXPECT_EQ(scanMinPointsPerPlane(2048, 0), 31);
 }
 
 TEST(PlanarSegmenter, UnknownBackendNameIsAClearError) {

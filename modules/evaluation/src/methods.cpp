@@ -91,8 +91,7 @@ std::map<std::string, Entry>& registry() {
     auto segmenter = makePlanarSegmenter<pcl::PointNormal>(options.segmenter);
     segmenter->setInputCloud(in.input.makeShared());
     segmenter->setNumberOfThreads(1);
-    segmenter->setMinPointsPerPlane(options.segment_min_points > 0 ? options.segment_min_points
-                                                                   : scanMinPointsPerPlane(in.input.size()));
+    segmenter->setMinPointsPerPlane(scanMinPointsPerPlane(in.input.size(), options.segment_min_points));
     segmenter->segment(seg);
 #else
     throw InvalidInputError("this build has no paco::segmentation; use the dataset's labels (--dataset-labels)");

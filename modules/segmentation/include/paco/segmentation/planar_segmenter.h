@@ -37,6 +37,12 @@ inline int scanMinPointsPerPlane(std::size_t points) {
   return share < 3.0 ? 3 : static_cast<int>(share);
 }
 
+/// The fewest points per plane the tools give the segmenter of a cloud of `points` points:
+/// `requested` when it is > 0 (--min-points), else scanMinPointsPerPlane(points).
+inline int scanMinPointsPerPlane(std::size_t points, int requested) {
+  return requested > 0 ? requested : scanMinPointsPerPlane(points);
+}
+
 /// Base of every planar segmentation backend, shaped like a PCL algorithm: setInputCloud,
 /// setIndices, optional setInputNormals, parameter setters, then segment().
 ///
