@@ -55,6 +55,7 @@ struct Options {
   int gt_points = 8192;
   int dense_points = 16384;
   bool segment = false;
+  int segment_min_points = 0;
   bool verify_mode = false;
   // --export
   bool export_mode = false;
@@ -231,6 +232,8 @@ int run(int argc, char** argv) {
       ("gt-points", po::value(&o.gt_points)->default_value(o.gt_points), "ground-truth points per part")
       ("dense-points", po::value(&o.dense_points)->default_value(o.dense_points), "dense surface sample views are cut from")
       ("segment", po::bool_switch(&o.segment), "label inputs with PlanarSegmenter (default: GT faces of the visible points)")
+      ("segment-min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points),
+       "with --segment: the smallest plane in points; 0: 1.5 % of each input's points, as paco_reconstruct does")
       ("verify", po::bool_switch(&o.verify_mode), "read a dataset back: DATASET_DIR (with --limit: N samples per split)")
       ("export", po::bool_switch(&o.export_mode), "export one sample: DATASET_DIR OUT.pcd")
       ("export-mesh", po::value(&o.export_mesh), "with --export: also write the GT mesh (normalised frame) here")
@@ -267,6 +270,10 @@ int run(int argc, char** argv) {
   if (o.mode != "nearest" && o.mode != "visibility") throw paco::app::UsageError("--mode must be nearest or visibility");
   if (o.segment && !paco::data::segmentationAvailable())
     throw paco::app::UsageError("--segment needs the segmentation module, which this build does not have");
+  if (o.segment_min_points < 0)
+    throw paco::app::UsageError("--segment-min-points must be >= 0 (0: 1.5 % of each input's points)");
+  if (o.segment_min_points > 0 && !o.segment)
+    throw paco::app::UsageError("--segment-min-points needs --segment");
 
   paco::data::BuildOptions build;
   paco::data::DatasetInfo& info = build.info;
@@ -280,6 +287,7 @@ int run(int argc, char** argv) {
   info.gt_points = o.gt_points;
   info.dense_points = o.dense_points;
   info.input_labels_from_segmenter = o.segment;
+  info.segment_min_points = o.segment_min_points;
   build.segment = o.segment;
   if (!o.augment_scale.empty()) {
     double lo = 0, hi = 0;

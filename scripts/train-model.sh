@@ -4,7 +4,8 @@
 # (the dataset build and the training both resume).
 #
 #   scripts/train-model.sh WORK_DIR [--init-from MODEL.pt] [--epochs N] [--seed S] [--jitter J]
-#                          [--orientation as-is|seen-planes] [--run NAME] [-- PACO_TRAIN_OPTIONS...]
+#                          [--orientation as-is|seen-planes] [--segment-min-points N] [--run NAME]
+#                          [-- PACO_TRAIN_OPTIONS...]
 #
 # --init-from starts a new run from a model's weights (e.g. models/paco_cpu.pt, to go on training
 # the shipped model on a machine that kept nothing else); without it a new run starts from random
@@ -12,7 +13,10 @@
 # --seed changes the training order and augmentation (not the data set); --jitter adds Gaussian
 # noise to the training inputs (paco_train --augment-jitter); --orientation is paco_train's
 # --input-orientation (default: the starting model's, else as-is); --run names the run folder
-# under WORK_DIR (default: run). Options after "--" go to paco_train as they are (e.g.
+# under WORK_DIR (default: run). --segment-min-points is paco_dataset's: 0 (default) labels the
+# inputs with planes of 1.5 % of their points, as paco_reconstruct segments, into WORK_DIR/data;
+# N > 0 uses planes of N points, into WORK_DIR/data_minN (the models up to the eleventh session's
+# were trained on --segment-min-points 50). Options after "--" go to paco_train as they are (e.g.
 # --quality-classification --lr 5e-5 --limit-train 16000); pass them again when resuming.
 # Needs the MFCAD meshes in ../shared/data/mfcad (or MFCAD_DIR) and a Release build in build/.
 set -euo pipefail
@@ -30,6 +34,7 @@ seed=1
 jitter=0
 orientation=""
 run_name=run
+segment_min_points=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --init-from) init_from=$2; shift 2 ;;
@@ -38,6 +43,7 @@ while [ $# -gt 0 ]; do
     --jitter) jitter=$2; shift 2 ;;
     --orientation) orientation=$2; shift 2 ;;
     --run) run_name=$2; shift 2 ;;
+    --segment-min-points) segment_min_points=$2; shift 2 ;;
     --) shift; break ;;
     *) echo "train-model.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
@@ -72,11 +78,13 @@ echo "train-model.sh: $(ls "$subset" | wc -l) meshes in the training subset"
 
 # Anisotropic scale 0.5-2 and rotation per part, 3 levels x 4 views, inputs labelled by GoCoPP
 # (the segmenter the pipeline uses). About 5 min on 2 cores.
-build/apps/paco_dataset "$subset" "$work/data" --augment-scale 0.5,2 --augment-rotate --segment --views 4 \
-  --jobs 2 --seed 1
+data="$work/data"
+if [ "$segment_min_points" != 0 ]; then data="$work/data_min$segment_min_points"; fi
+build/apps/paco_dataset "$subset" "$data" --augment-scale 0.5,2 --augment-rotate --segment \
+  --segment-min-points "$segment_min_points" --views 4 --jobs 2 --seed 1
 
 run="$work/$run_name"
-args=("$work/data" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 --augment-offset 0.05
+args=("$data" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 --augment-offset 0.05
       --augment-jitter "$jitter" --limit-val 480 --epochs "$epochs" --threads 2 --seed "$seed" --checkpoint-every 100)
 if [ -n "$orientation" ]; then
   args+=(--input-orientation "$orientation")

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 
 namespace {
@@ -108,6 +109,61 @@ TEST(DatasetBuild, SegmentOptionLabelsWithPlanarSegmenterOrSaysItCannot) {
   }
 }
 
+/// Points per segment label (label -1 left out).
+std::map<int, int> segmentSizes(const std::vector<int>& labels) {
+  std::map<int, int> sizes;
+  for (int label : labels)
+    if (label >= 0) ++sizes[label];
+  return sizes;
+}
+
+TEST(DatasetBuild, SegmentMinPointsIsTheSmallestSegmentAndZeroMeansTheToolsShare) {
+  if (!segmentationAvailable()) GTEST_SKIP() << "built without the segmentation module";
+  BuildOptions options = smallOptions();
+  options.info.levels = {0};
+  options.info.input_points = 1024;
+  options.segment = true;
+  // A procedural part: faces of many sizes, some far below 300 of the 1024 points.
+  const paco::SurfaceMesh part = generatePart(7);
+
+  options.info.segment_min_points = 300;
+  const PartSamples coarse = buildPart("p", part, options);
+  options.info.segment_min_points = 0;  // 1.5 % of 1024 points: 15
+  const PartSamples fine = buildPart("p", part, options);
+  ASSERT_EQ(coarse.samples.size(), fine.samples.size());
+  std::size_t coarse_segments = 0, fine_segments = 0;
+  for (std::size_t i = 0; i < fine.samples.size(); ++i) {
+    const auto coarse_sizes = segmentSizes(coarse.samples[i].labels);
+    const auto fine_sizes = segmentSizes(fine.samples[i].labels);
+    for (const auto& [label, size] : coarse_sizes) EXPECT_GE(size, 300) << "segment " << label;
+    for (const auto& [label, size] : fine_sizes) EXPECT_GE(size, 15) << "segment " << label;
+    coarse_segments += coarse_sizes.size();
+    fine_segments += fine_sizes.size();
+  }
+  EXPECT_GT(fine_segments, coarse_segments);
+
+  options.info.segment_min_points = -1;
+  EXPECT_THROW(buildPart("p", part, options), paco::InvalidInputError);
+}
+
+TEST(DatasetInfo, SegmentMinPointsIsRecordedAndOldInfoFilesMeanFifty) {
+  DatasetInfo info;
+  info.input_labels_from_segmenter = true;
+  info.segment_min_points = 0;
+  EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_points, 0);
+  EXPECT_NE(info.describe().find("1.5 %"), std::string::npos);
+  info.segment_min_points = 31;
+  EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_points, 31);
+  EXPECT_NE(info.describe().find("at least 31 points"), std::string::npos);
+  // Written before the key existed: segmented with PlanarSegmenter's default, 50 points.
+  const DatasetInfo old = DatasetInfo::parse("format_version\t1\ninput_labels_from_segmenter\t1\n", "old");
+  EXPECT_EQ(old.segment_min_points, 50);
+  // Unsegmented datasets do not record it, so it never tells them apart.
+  DatasetInfo plain;
+  plain.segment_min_points = 0;
+  EXPECT_EQ(plain.serialize(), DatasetInfo().serialize());
+}
+
 TEST(DatasetIo, ReaderReadsBackWhatWasWritten) {
   paco::test::TempDir dir;
   const BuildOptions options = smallOptions();
@@ -186,6 +242,16 @@ TEST(DatasetIo, WriterRefusesOtherOptionsAndReaderReportsDamage) {
   BuildOptions other = options;
   other.info.noise_percent = 3.0;
   EXPECT_THROW(DatasetWriter(dir.path().string(), other.info), paco::IoError);
+  {
+    // Segmented with another smallest plane is another dataset too.
+    paco::test::TempDir segmented;
+    other = options;
+    other.info.input_labels_from_segmenter = true;
+    other.info.segment_min_points = 0;
+    DatasetWriter first(segmented.path().string(), other.info);
+    other.info.segment_min_points = 50;
+    EXPECT_THROW(DatasetWriter(segmented.path().string(), other.info), paco::IoError);
+  }
 
   const Dataset intact(dir.path().string());
   const Split split = splitOf("a");

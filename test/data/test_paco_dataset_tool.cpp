@@ -71,6 +71,12 @@ TEST(PacoDatasetTool, BadMeshesAreListedNotFatal) {
   EXPECT_EQ(dataset.info().mode, "visibility");
   // Usage errors exit with 2.
   EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " " + dir.file("ds"), &log), 2);
+  const std::string build_new = paco::test::toolPath("paco_dataset") + " " + dir.file("meshes") + " " + dir.file("ds2") + kSmall;
+  EXPECT_EQ(paco::test::runCommand(build_new + " --segment --segment-min-points -1", &log), 2);
+  EXPECT_NE(log.find("--segment-min-points must be >= 0"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(build_new + " --segment-min-points 40", &log), 2);
+  EXPECT_NE(log.find("needs --segment"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("ds2")));
   EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --help", &log), 0);
 }
 

@@ -55,6 +55,8 @@ PartSamples buildPart(const std::string& part, const SurfaceMesh& mesh, const Bu
   if (info.levels.empty() || info.views <= 0) throw InvalidInputError("buildPart: no levels or no views asked");
   if (options.segment && !segmentationAvailable())
     throw InvalidInputError("--segment needs the segmentation module; rebuild paco with it enabled");
+  if (options.segment && info.segment_min_points < 0)
+    throw InvalidInputError("segment_min_points must be >= 0 (0: 1.5 % of each input's points)");
   mesh.validate(part);
 
   PartSamples out;
@@ -105,6 +107,7 @@ PartSamples buildPart(const std::string& part, const SurfaceMesh& mesh, const Bu
         auto segmenter = makePlanarSegmenter<pcl::PointNormal>("gocopp");
         segmenter->setInputCloud(cloud);
         segmenter->setNumberOfThreads(1);
+        segmenter->setMinPointsPerPlane(scanMinPointsPerPlane(cloud->size(), info.segment_min_points));
         PlanarSegmentation segmentation;
         segmenter->segment(segmentation);
         sample.labels = segmentation.labels;

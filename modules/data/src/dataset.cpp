@@ -109,8 +109,10 @@ std::string DatasetInfo::serialize() const {
       << "input_points\t" << input_points << "\n"
       << "gt_points\t" << gt_points << "\n"
       << "dense_points\t" << dense_points << "\n"
-      << "input_labels_from_segmenter\t" << (input_labels_from_segmenter ? 1 : 0) << "\n"
-      << "source\t" << source << "\n";
+      << "input_labels_from_segmenter\t" << (input_labels_from_segmenter ? 1 : 0) << "\n";
+  // Only segmented inputs have a smallest plane; older readers ignore the key.
+  if (input_labels_from_segmenter) out << "segment_min_points\t" << segment_min_points << "\n";
+  out << "source\t" << source << "\n";
   return out.str();
 }
 
@@ -145,6 +147,7 @@ DatasetInfo DatasetInfo::parse(const std::string& text, const std::string& where
       else if (key == "gt_points") info.gt_points = std::stoi(value);
       else if (key == "dense_points") info.dense_points = std::stoi(value);
       else if (key == "input_labels_from_segmenter") info.input_labels_from_segmenter = value == "1";
+      else if (key == "segment_min_points") info.segment_min_points = std::stoi(value);
       else if (key == "source") info.source = value;
       // Unknown keys are ignored: a newer writer may add information.
     }
@@ -177,7 +180,11 @@ std::string DatasetInfo::describe() const {
   if (scaled) out << "anisotropic scale per axis in [" << augment_scale_min << ", " << augment_scale_max << "]";
   if (augment_rotate) out << (scaled ? ", " : "") << "random rotation";
   out << "\ninput labels: "
-      << (input_labels_from_segmenter ? "PlanarSegmenter" : "ground-truth faces of the visible points (not PlanarSegmenter)")
+      << (input_labels_from_segmenter
+              ? "PlanarSegmenter, planes of at least " +
+                    (segment_min_points > 0 ? std::to_string(segment_min_points) + " points"
+                                            : std::string("1.5 % of the input's points (the tools' rule)"))
+              : std::string("ground-truth faces of the visible points (not PlanarSegmenter)"))
       << "\npoints: " << input_points << " per input, " << gt_points << " ground truth, cut from " << dense_points
       << " dense\nseed: " << seed << "\nsource: " << source << "\n";
   return out.str();

@@ -88,6 +88,10 @@ struct DatasetInfo {
   int gt_points = 8192;
   int dense_points = 16384;           ///< dense surface sample the views are cut from
   bool input_labels_from_segmenter = false;
+  /// With input_labels_from_segmenter: the segmenter's smallest plane, in points; 0 means
+  /// paco::scanMinPointsPerPlane of each input (1.5 %, the tools' rule). Datasets written before
+  /// this key existed were segmented with the class default, 50.
+  int segment_min_points = 50;
   std::string source;                 ///< mesh folder or "procedural"
 
   /// Human-readable summary, one line per property.
