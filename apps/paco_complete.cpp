@@ -36,6 +36,7 @@ struct Options {
   std::string input, output, pcd, model;
   std::string segmenter = "gocopp";
   int min_points = 0;
+  int min_parallel_points = paco::kScanParallelPlanesAuto;
   double epsilon = 0.004;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
@@ -80,6 +81,7 @@ int run(int argc, char** argv) {
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
   paco::app::addMaxPointsOption(visible, o.max_points);
   paco::app::addMinPointsOption(visible, o.min_points);
+  paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -101,6 +103,7 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
+  paco::app::validateMinParallelPoints(o.min_parallel_points);
   o.fusion.validate();
   if (o.threads < 0) throw paco::app::UsageError("--threads must be >= 0");
 
@@ -160,6 +163,9 @@ int run(int argc, char** argv) {
     }
   } else {
     segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
+    // The primitives go to paco_assemble, PolyFit by default.
+    segmenter->setMinPointsPerParallelPlane(
+        paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points, /*for_polyfit=*/true));
     segmenter->setInputCloud(cloud);
     segmenter->segment(segmentation);
   }

@@ -38,6 +38,7 @@ struct Options {
   std::string dataset, split = "val", methods = "direct,oracle,poisson-qem", assemblers = "polyfit,cell-complex";
   std::string levels = "0,1,2", views = "0", output_dir, failure_box = "bbox", segmenter = "gocopp";
   int segment_min_points = 0;
+  int segment_min_parallel_points = paco::evaluation::kParallelPlanesByAssembler;
   std::size_t limit = 0, samples = 10000, qem_faces = 40;
   unsigned jobs = 1;
   double time_limit = 60.0;
@@ -165,6 +166,7 @@ int dataset(const Options& o) {
   b.method.max_candidate_faces = o.max_candidate_faces;
   b.method.segmenter = o.segmenter;
   b.method.segment_min_points = o.segment_min_points;
+  b.method.segment_min_parallel_points = o.segment_min_parallel_points;
   b.method.use_dataset_labels = o.dataset_labels;
   if (o.max_points != 0 && o.max_points < paco::evaluation::kMinInputPointBudget)
     throw paco::app::UsageError("--max-points must be 0 (keep all) or at least " +
@@ -219,6 +221,9 @@ int run(int argc, char** argv) {
        "polyfit: leave out the least confident predicted primitives until the candidate faces fit (0: no limit)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco")
       ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the input's points, at least 3)")
+      ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
+       "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the input's points; -1: none; "
+       "-2: 0.5 % with cell-complex, none with polyfit)")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")

@@ -38,6 +38,7 @@ struct Options {
   bool no_completion = false;
   std::string segmenter = "gocopp";
   int min_points = 0;
+  int min_parallel_points = paco::kScanParallelPlanesAuto;
   std::string model;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
@@ -92,6 +93,7 @@ int run(int argc, char** argv) {
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
   paco::app::addMaxPointsOption(visible, o.max_points);
   paco::app::addMinPointsOption(visible, o.min_points);
+  paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -107,6 +109,7 @@ int run(int argc, char** argv) {
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
+  paco::app::validateMinParallelPoints(o.min_parallel_points);
   o.fusion.validate();
   if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
   if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
@@ -146,11 +149,16 @@ int run(int argc, char** argv) {
   timer.start("segment");
   paco::PlanarSegmentation segmentation;
   segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
+  segmenter->setMinPointsPerParallelPlane(
+      paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points, o.assembler == "polyfit"));
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();
-  std::printf("segment (%s, planes of >= %d points): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
-              segmenter->getMinPointsPerPlane(), segmentation.size(), 100.0 * segmentation.coverage());
+  const int parallel_points = segmenter->getMinPointsPerParallelPlane();
+  const std::string parallel =
+      parallel_points > 0 ? ", parallel to a larger one >= " + std::to_string(parallel_points) : std::string();
+  std::printf("segment (%s, planes of >= %d points%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
+              segmenter->getMinPointsPerPlane(), parallel.c_str(), segmentation.size(), 100.0 * segmentation.coverage());
   if (segmentation.empty())
     throw paco::InvalidInputError("'" + o.input + "': no planar segment found; is it a piecewise-planar object?");
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

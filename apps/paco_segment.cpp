@@ -30,6 +30,7 @@ struct Options {
   double epsilon = 0.004;
   double normal_threshold = 0.85;
   int min_points = 50;
+  int min_parallel_points = 0;
   int neighbours = 20;
   unsigned int threads = 0;
   bool ignore_normals = false;
@@ -69,6 +70,7 @@ paco::PlanarSegmenter<pcl::PointNormal>::Ptr makeSegmenter(const Options& o) {
   segmenter->setDistanceThreshold(o.epsilon);
   segmenter->setNormalThreshold(o.normal_threshold);
   segmenter->setMinPointsPerPlane(o.min_points);
+  segmenter->setMinPointsPerParallelPlane(o.min_parallel_points);
   segmenter->setNumberOfNeighbours(o.neighbours);
   segmenter->setNumberOfThreads(o.threads);
   if (auto* g = as<paco::GoCoPPSegmenter<pcl::PointNormal>>(segmenter)) {
@@ -97,6 +99,8 @@ int run(int argc, char** argv) {
       ("epsilon,e", po::value(&o.epsilon)->default_value(o.epsilon, "0.004"), "inlier distance to a plane, fraction of the bounding-box diagonal")
       ("normal-threshold", po::value(&o.normal_threshold)->default_value(o.normal_threshold, "0.85"), "min |cos| between a point normal and its plane normal")
       ("min-points", po::value(&o.min_points)->default_value(o.min_points), "fewest points of a plane")
+      ("min-parallel-points", po::value(&o.min_parallel_points)->default_value(o.min_parallel_points),
+       "fewest points of a plane parallel to a larger one (0: none, else >= 3)")
       ("neighbours,k", po::value(&o.neighbours)->default_value(o.neighbours), "neighbours for normal estimation and region growing")
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for normal estimation (0: all cores)")
       ("ignore-normals", po::bool_switch(&o.ignore_normals), "estimate normals even when the file has them");

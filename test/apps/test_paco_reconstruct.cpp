@@ -59,10 +59,15 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
                                             " --no-completion --assembler cell-complex",
                                         &log);
   ASSERT_EQ(rc, 0) << log;
-  // By default the smallest plane is a share of the points (the sample has no repeated points).
+  // By default the smallest plane is a share of the points (the sample has no repeated points),
+  // and, with the cell complex, a smaller share for planes parallel to a larger one.
   const paco::io::LabelledCloud cloud = paco::io::loadCloud(input);
   const std::string min_points = std::to_string(paco::scanMinPointsPerPlane(cloud.points.size()));
-  EXPECT_NE(log.find("segment (gocopp, planes of >= " + min_points + " points)"), std::string::npos) << log;
+  const std::string min_parallel_points = std::to_string(paco::scanMinPointsPerParallelPlane(cloud.points.size(), 0));
+  EXPECT_NE(log.find("segment (gocopp, planes of >= " + min_points + " points, parallel to a larger one >= " +
+                     min_parallel_points + ")"),
+            std::string::npos)
+      << log;
   EXPECT_NE(log.find("timing:"), std::string::npos) << log;
 
   const paco::SurfaceMesh mesh = paco::io::loadMesh(mesh_path);
@@ -223,6 +228,11 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-points 2", &log), 2) << log;
   EXPECT_NE(log.find("--min-points must be 0 (1.5 % of the points) or at least 3, got 2"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-parallel-points 2", &log), 2)
+      << log;
+  EXPECT_NE(log.find("--min-parallel-points must be -2 (by assembler), -1 (none), 0 (0.5 % of the points) or at least 3, got 2"),
+            std::string::npos)
+      << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
   EXPECT_NE(log.find("--fill-box"), std::string::npos);

@@ -182,6 +182,88 @@ TEST(PlanarSegmenter, ScanMinimumIsAShareOfThePointsAndAtLeastThree) {
   EXPECT_EQ(scanMinPointsPerPlane(2048, 0), 31);
 }
 
+TEST(PlanarSegmenter, ScanParallelMinimumIsAShareUnlessACountOrOffIsAsked) {
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 0), 10);  // 10.24, rounded
+  EXPECT_EQ(scanMinPointsPerParallelPlane(100, 0), 3);
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 15), 15);
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, -1), 0);  // off
+  // The tools' default: the share for the cell complex, none for PolyFit.
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, kScanParallelPlanesAuto, /*for_polyfit=*/false), 10);
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, kScanParallelPlanesAuto, /*for_polyfit=*/true), 0);
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 0, /*for_polyfit=*/true), 10);
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 12, /*for_polyfit=*/true), 12);
+}
+
+// Labels two known large planes and nothing else, so that the parallel-plane pass is all that
+// can find the rest.
+class KnownLargePlanes : public PlanarSegmenter<pcl::PointNormal> {
+ public:
+  KnownLargePlanes(int first_plane_end, int second_plane_end) : first_end_(first_plane_end), second_end_(second_plane_end) {}
+  std::string name() const override { return "known-large-planes"; }
+
+ protected:
+  void performSegmentation(std::vector<int>& labels) override {
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+      const int source = prepared().source_indices[i];
+      labels[i] = source < first_end_ ? 0 : (source < second_end_ ? 1 : -1);
+    }
+  }
+
+ private:
+  int first_end_, second_end_;
+};
+
+TEST(PlanarSegmenter, SmallPlanesParallelToALargeOneGetASecondChance) {
+  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointNormal>>();
+  auto add = [&](float x, float y, float z, float nx, float ny, float nz) {
+    pcl::PointNormal p;
+    p.x = x, p.y = y, p.z = z, p.normal_x = nx, p.normal_y = ny, p.normal_z = nz;
+    cloud->push_back(p);
+  };
+  for (int i = 0; i < 30; ++i)  // floor z = 0: 900 points
+    for (int j = 0; j < 30; ++j) add(i / 29.0f, j / 29.0f, 0.0f, 0, 0, 1);
+  for (int i = 0; i < 30; ++i)  // wall x = 0: 540 points
+    for (int j = 0; j < 18; ++j) add(0.0f, i / 29.0f, 0.6f * j / 17.0f, -1, 0, 0);
+  const int first_small = static_cast<int>(cloud->size());
+  for (int i = 0; i < 4; ++i)  // a pocket floor at z = 0.4, parallel to the floor: 12 points
+    for (int j = 0; j < 3; ++j) add(0.5f + 0.03f * i, 0.5f + 0.05f * j, 0.4f, 0, 0, 1);
+  const int strip = static_cast<int>(cloud->size());
+  for (int i = 0; i < 12; ++i) add(0.8f, 0.1f + 0.07f * i, 0.25f, 0, 0, 1);  // a line: no unique plane
+  // Single points facing up, 0.03 apart in height (2 epsilon is 0.012 here) and away from the
+  // other heights: no window holds more than one.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> unit(0.05f, 0.95f);
+  for (float z : {0.06f, 0.09f, 0.12f, 0.15f, 0.18f, 0.31f, 0.34f, 0.47f, 0.50f, 0.53f, 0.56f, 0.59f})
+    add(unit(rng), unit(rng), z, 0, 0, 1);
+
+  KnownLargePlanes seg(900, 1440);
+  seg.setInputCloud(cloud);
+  PlanarSegmentation result;
+  seg.segment(result);
+  EXPECT_EQ(result.size(), 2u) << "off by default";
+
+  seg.setMinPointsPerParallelPlane(10);
+  seg.segment(result);
+  ASSERT_EQ(result.size(), 3u);
+  const Plane& pocket = result.planes[2];  // sorted by size: the 12-point pocket floor is last
+  EXPECT_GT(pocket.normal.dot(Eigen::Vector3d::UnitZ()), 0.9999);
+  EXPECT_NEAR(pocket.offset, -0.4, 1e-5);
+  std::vector<int> expected;
+  for (int i = first_small; i < strip; ++i) expected.push_back(i);
+  EXPECT_EQ(std::vector<int>(result.segments[2].indices.begin(), result.segments[2].indices.end()), expected);
+  for (int i = strip; i < static_cast<int>(cloud->size()); ++i) EXPECT_EQ(result.labels[i], -1) << "point " << i;
+
+  seg.setMinPointsPerParallelPlane(13);  // one more point than the pocket floor has
+  seg.segment(result);
+  EXPECT_EQ(result.size(), 2u);
+  seg.setMinPointsPerParallelPlane(900);  // not below the plane minimum: changes nothing
+  seg.segment(result);
+  EXPECT_EQ(result.size(), 2u);
+
+  EXPECT_THROW(seg.setMinPointsPerParallelPlane(2), InvalidInputError);
+  EXPECT_THROW(seg.setMinPointsPerParallelPlane(-1), InvalidInputError);
+}
+
 TEST(PlanarSegmenter, UnknownBackendNameIsAClearError) {
   try {
     makePlanarSegmenter<pcl::PointXYZ>("hough");

@@ -92,6 +92,9 @@ std::map<std::string, Entry>& registry() {
     segmenter->setInputCloud(in.input.makeShared());
     segmenter->setNumberOfThreads(1);
     segmenter->setMinPointsPerPlane(scanMinPointsPerPlane(in.input.size(), options.segment_min_points));
+    static_assert(kParallelPlanesByAssembler == kScanParallelPlanesAuto, "one meaning of -2");
+    segmenter->setMinPointsPerParallelPlane(
+        scanMinPointsPerParallelPlane(in.input.size(), options.segment_min_parallel_points, options.assembler == "polyfit"));
     segmenter->segment(seg);
 #else
     throw InvalidInputError("this build has no paco::segmentation; use the dataset's labels (--dataset-labels)");

@@ -232,6 +232,15 @@ void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector
   }
 }
 
+std::vector<std::vector<int>> membersByLabel(const std::vector<int>& labels) {
+  int max_label = -1;
+  for (const int l : labels) max_label = std::max(max_label, l);
+  std::vector<std::vector<int>> members(static_cast<std::size_t>(max_label + 1));
+  for (std::size_t i = 0; i < labels.size(); ++i)
+    if (labels[i] >= 0) members[static_cast<std::size_t>(labels[i])].push_back(static_cast<int>(i));
+  return members;
+}
+
 Plane fitPlane(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& indices) {
   std::vector<Eigen::Vector3d> xyz;
   xyz.reserve(indices.size());
@@ -243,11 +252,7 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
                                         std::size_t min_points) {
   const auto& points = *prepared.points;
   min_points = std::max<std::size_t>(min_points, 3);
-  int max_label = -1;
-  for (const int l : labels) max_label = std::max(max_label, l);
-  std::vector<std::vector<int>> groups(static_cast<std::size_t>(max_label + 1));
-  for (std::size_t i = 0; i < labels.size(); ++i)
-    if (labels[i] >= 0) groups[static_cast<std::size_t>(labels[i])].push_back(static_cast<int>(i));
+  std::vector<std::vector<int>> groups = membersByLabel(labels);
 
   struct Fitted {
     Plane plane;

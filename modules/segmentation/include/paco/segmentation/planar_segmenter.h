@@ -43,6 +43,25 @@ inline int scanMinPointsPerPlane(std::size_t points, int requested) {
   return requested > 0 ? requested : scanMinPointsPerPlane(points);
 }
 
+/// The share of a scan's points a plane parallel to a larger one needs in the tools
+/// (PlanarSegmenter::setMinPointsPerParallelPlane): 0.5 %, 10 of a 2,048-point input.
+constexpr double kScanMinParallelPlaneFraction = 0.005;
+
+/// The tools' default request for scanMinPointsPerParallelPlane: decide by the assembler.
+constexpr int kScanParallelPlanesAuto = -2;
+
+/// The fewest points of a plane parallel to a larger one the tools give the segmenter of a cloud
+/// of `points` points: `requested` when > 0; 0 (off) when -1; kScanMinParallelPlaneFraction of
+/// the points, rounded and at least 3, when 0, or when kScanParallelPlanesAuto and the planes do
+/// not go to PolyFit. PolyFit's MIP often finds no solution within its time limit once many
+/// small planes are added (doc/results.md, twelfth session), the cell complex only gains.
+inline int scanMinPointsPerParallelPlane(std::size_t points, int requested, bool for_polyfit = false) {
+  if (requested > 0) return requested;
+  if (requested == kScanParallelPlanesAuto ? for_polyfit : requested != 0) return 0;
+  const double share = kScanMinParallelPlaneFraction * static_cast<double>(points) + 0.5;
+  return share < 3.0 ? 3 : static_cast<int>(share);
+}
+
 /// Base of every planar segmentation backend, shaped like a PCL algorithm: setInputCloud,
 /// setIndices, optional setInputNormals, parameter setters, then segment().
 ///
@@ -89,6 +108,15 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   void setMinPointsPerPlane(int min_points);
   int getMinPointsPerPlane() const { return min_points_; }
 
+  /// Smaller planes parallel to a plane found: after the backend, segments below
+  /// getMinPointsPerPlane() are freed, and the free points that lie on a plane parallel to a
+  /// kept one (within the distance threshold, normals within 20 degrees) form a segment once
+  /// there are this many (detail::recoverParallelPlanes). Pocket floors and step faces seen by
+  /// a few points are nearly always parallel to a large face. 0 (default) turns it off; else
+  /// >= 3; at or above getMinPointsPerPlane() it changes nothing.
+  void setMinPointsPerParallelPlane(int min_points);
+  int getMinPointsPerParallelPlane() const { return min_parallel_points_; }
+
   /// k, the neighbours used to estimate normals and to grow regions. Range >= 3; default 20.
   void setNumberOfNeighbours(int k);
   int getNumberOfNeighbours() const { return neighbours_; }
@@ -127,6 +155,7 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   double distance_threshold_ = 0.004;
   double normal_threshold_ = 0.85;
   int min_points_ = 50;
+  int min_parallel_points_ = 0;
   int neighbours_ = 20;
   unsigned int threads_ = 0;
   std::optional<Eigen::Vector3d> viewpoint_;

@@ -104,6 +104,20 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
 void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<std::vector<int>>& members,
                              std::vector<Plane>& planes);
 
+/// Gives small planes a second chance: a face of a pocket or a step, seen by a handful of points,
+/// is usually parallel to a large face. Segments of fewer than `min_points` points are freed
+/// (label -1); then, for the direction of each remaining segment (parallel ones once, most
+/// supported first), the free points whose normals agree with it (|cos| >= min_abs_cosine) are
+/// sorted by their offset along it, and the 2 x `distance` wide window holding the most of them
+/// becomes a new segment while it holds at least `min_parallel_points` points (>= 3) and its own
+/// least-squares plane is parallel to the direction. Works in the working frame on `labels` (one
+/// per working point); returns the number of segments added.
+std::size_t recoverParallelPlanes(const PreparedCloud& prepared, std::vector<int>& labels, std::size_t min_points,
+                                  std::size_t min_parallel_points, double distance, double min_abs_cosine);
+
+/// The indices of the points of each label 0..max (empty for unused labels; -1 left out).
+std::vector<std::vector<int>> membersByLabel(const std::vector<int>& labels);
+
 /// Least-squares plane of some working points (throws InvalidInputError when degenerate).
 Plane fitPlane(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& indices);
 

@@ -7,6 +7,7 @@
 #include <pcl/common/point_tests.h>
 #include <pcl/type_traits.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -36,6 +37,14 @@ void PlanarSegmenter<PointT>::setMinPointsPerPlane(int min_points) {
     throw InvalidInputError("PlanarSegmenter::setMinPointsPerPlane: a plane needs at least 3 points; got " +
                             std::to_string(min_points));
   min_points_ = min_points;
+}
+
+template <typename PointT>
+void PlanarSegmenter<PointT>::setMinPointsPerParallelPlane(int min_points) {
+  if (min_points != 0 && min_points < 3)
+    throw InvalidInputError("PlanarSegmenter::setMinPointsPerParallelPlane: 0 (off) or at least 3 points; got " +
+                            std::to_string(min_points));
+  min_parallel_points_ = min_points;
 }
 
 template <typename PointT>
@@ -110,7 +119,16 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
     if (labels.size() != prepared_.size())
       throw Error("PlanarSegmenter(" + name() + "): the backend returned " + std::to_string(labels.size()) +
                   " labels for " + std::to_string(prepared_.size()) + " points");
-    output = detail::finalizeSegmentation(prepared_, labels, static_cast<std::size_t>(min_points_));
+    std::size_t smallest = static_cast<std::size_t>(min_points_);
+    if (min_parallel_points_ > 0 && min_parallel_points_ < min_points_ && !prepared_.collinear) {
+      // Within 20 degrees: stricter than a backend's own threshold, since a handful of points
+      // has no neighbourhood to vouch for it.
+      const double min_abs_cosine = std::max(normal_threshold_, 0.94);
+      detail::recoverParallelPlanes(prepared_, labels, smallest, static_cast<std::size_t>(min_parallel_points_),
+                                    distance_threshold_, min_abs_cosine);
+      smallest = static_cast<std::size_t>(min_parallel_points_);
+    }
+    output = detail::finalizeSegmentation(prepared_, labels, smallest);
   } catch (...) {
     deinitCompute();
     throw;
