@@ -23,7 +23,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 if [ $# -lt 1 ]; then
-  sed -n 2,17p "$0" >&2
+  sed -n 2,21p "$0" >&2
   exit 2
 fi
 work=$1
