@@ -100,6 +100,7 @@ int run(int argc, char** argv) {
        "... and this mean point distance (fraction of the diagonal; 0: never merge)")
       ("max-candidate-faces", po::value(&max_candidate_faces)->default_value(max_candidate_faces),
        "polyfit: leave out the least confident primitives (confidence < 1) until the candidate faces fit (0: no limit)")
+      ("no-warm-start", "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
       ("verbose,v", "print the MIP solver's log");
   po::options_description hidden;
   hidden.add_options()("input", po::value(&input));
@@ -135,6 +136,7 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError(e.what());
   }
   assembler.setVerbose(vm.count("verbose") > 0);
+  assembler.setWarmStart(vm.count("no-warm-start") == 0);
 
   paco::InterruptGuard interrupt_guard;
   paco::app::StageTimer timer;
@@ -157,6 +159,8 @@ int run(int argc, char** argv) {
     std::printf("polyfit: %zu candidate faces (%.3f s), MIP %zu variables x %zu constraints solved %s in %.3f s\n",
                 result.num_candidate_faces, result.seconds_partition, result.num_variables, result.num_constraints,
                 result.solution_is_optimal ? "to optimality" : "(not proven optimal)", result.seconds_solve);
+  if (result.num_warm_start_faces)
+    std::printf("polyfit: started from the cell complex's surface (%zu candidate faces)\n", result.num_warm_start_faces);
   else
     std::printf("cell-complex: %zu cells (%.3f s), %zu cell faces, labelling and mesh %.3f s\n", result.num_cells,
                 result.seconds_partition, result.num_candidate_faces, result.seconds_solve);

@@ -36,7 +36,7 @@ struct Options {
   std::string input, output, pcd, model;
   std::string segmenter = "gocopp";
   int min_points = 0;
-  int min_parallel_points = paco::kScanParallelPlanesAuto;
+  int min_parallel_points = 0;
   double epsilon = 0.004;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
@@ -165,7 +165,7 @@ int run(int argc, char** argv) {
     segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
     // The primitives go to paco_assemble, PolyFit by default.
     segmenter->setMinPointsPerParallelPlane(
-        paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points, /*for_polyfit=*/true));
+        paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points));
     segmenter->setInputCloud(cloud);
     segmenter->segment(segmentation);
   }

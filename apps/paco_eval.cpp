@@ -38,11 +38,12 @@ struct Options {
   std::string dataset, split = "val", methods = "direct,oracle,poisson-qem", assemblers = "polyfit,cell-complex";
   std::string levels = "0,1,2", views = "0", output_dir, failure_box = "bbox", segmenter = "gocopp";
   int segment_min_points = 0;
-  int segment_min_parallel_points = paco::evaluation::kParallelPlanesByAssembler;
+  int segment_min_parallel_points = 0;
   std::size_t limit = 0, samples = 10000, qem_faces = 40;
   unsigned jobs = 1;
   double time_limit = 60.0;
   std::size_t max_candidate_faces = paco::evaluation::MethodOptions().max_candidate_faces;
+  bool no_warm_start = false;
   bool dataset_labels = false;
   std::size_t max_points = paco::evaluation::MethodOptions().max_input_points;
   bool quiet = false;
@@ -164,6 +165,7 @@ int dataset(const Options& o) {
   b.progress = !o.quiet;
   b.method.time_limit = o.time_limit;
   b.method.max_candidate_faces = o.max_candidate_faces;
+  b.method.polyfit_warm_start = !o.no_warm_start;
   b.method.segmenter = o.segmenter;
   b.method.segment_min_points = o.segment_min_points;
   b.method.segment_min_parallel_points = o.segment_min_parallel_points;
@@ -219,11 +221,11 @@ int run(int argc, char** argv) {
       ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "seconds per assembly; past it the case fails as time-limit")
       ("max-candidate-faces", po::value(&o.max_candidate_faces)->default_value(o.max_candidate_faces),
        "polyfit: leave out the least confident predicted primitives until the candidate faces fit (0: no limit)")
+      ("no-warm-start", po::bool_switch(&o.no_warm_start), "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco")
       ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the input's points, at least 3)")
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
-       "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the input's points; -1: none; "
-       "-2: 0.5 % with cell-complex, none with polyfit)")
+       "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the input's points; -1: none)")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")

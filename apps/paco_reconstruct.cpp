@@ -38,7 +38,7 @@ struct Options {
   bool no_completion = false;
   std::string segmenter = "gocopp";
   int min_points = 0;
-  int min_parallel_points = paco::kScanParallelPlanesAuto;
+  int min_parallel_points = 0;
   std::string model;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   bool no_fusion = false;
@@ -47,6 +47,7 @@ struct Options {
   std::string solver = "cbc";
   double time_limit = 60.0;
   std::size_t max_candidate_faces = paco::PolygonalAssembler::kDefaultMaxCandidateFaces;
+  bool no_warm_start = false;
   bool drop_non_finite = false;
   std::size_t max_points = paco::kDefaultScanPointBudget;
   int threads = 0;
@@ -89,6 +90,7 @@ int run(int argc, char** argv) {
       ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "assembly time budget in seconds")
       ("max-candidate-faces", po::value(&o.max_candidate_faces)->default_value(o.max_candidate_faces),
        "polyfit: leave out the least confident unseen primitives until the candidate faces fit (0: no limit)")
+      ("no-warm-start", po::bool_switch(&o.no_warm_start), "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
   paco::app::addMaxPointsOption(visible, o.max_points);
@@ -121,6 +123,7 @@ int run(int argc, char** argv) {
   assembler.setMipSolver(o.solver);
   assembler.setTimeLimit(o.time_limit);
   assembler.setMaxCandidateFaces(o.max_candidate_faces);
+  assembler.setWarmStart(!o.no_warm_start);
   paco::CompletionModel::ConstPtr model;
   paco::app::StageTimer timer;
   if (!o.no_completion) {
@@ -150,7 +153,7 @@ int run(int argc, char** argv) {
   paco::PlanarSegmentation segmentation;
   segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
   segmenter->setMinPointsPerParallelPlane(
-      paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points, o.assembler == "polyfit"));
+      paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points));
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();

@@ -35,13 +35,13 @@ inline void addMinParallelPointsOption(boost::program_options::options_descripti
   options.add_options()(
       "min-parallel-points", boost::program_options::value(&min_points)->default_value(min_points),
       "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the working cloud's points; "
-      "-1: none; -2: 0.5 % with the cell complex, none with polyfit, whose solver often runs out of time with them)");
+      "-1: none)");
 }
 
 inline void validateMinParallelPoints(int min_points) {
-  if (min_points != kScanParallelPlanesAuto && min_points != -1 && min_points != 0 && min_points < 3)
-    throw UsageError("--min-parallel-points must be -2 (by assembler), -1 (none), 0 (0.5 % of the points) or at "
-                     "least 3, got " + std::to_string(min_points));
+  if (min_points != -1 && min_points != 0 && min_points < 3)
+    throw UsageError("--min-parallel-points must be -1 (none), 0 (0.5 % of the points) or at least 3, got " +
+                     std::to_string(min_points));
 }
 
 inline void validateMaxPoints(std::size_t max_points) {

@@ -60,7 +60,7 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
                                         &log);
   ASSERT_EQ(rc, 0) << log;
   // By default the smallest plane is a share of the points (the sample has no repeated points),
-  // and, with the cell complex, a smaller share for planes parallel to a larger one.
+  // and a smaller share for planes parallel to a larger one.
   const paco::io::LabelledCloud cloud = paco::io::loadCloud(input);
   const std::string min_points = std::to_string(paco::scanMinPointsPerPlane(cloud.points.size()));
   const std::string min_parallel_points = std::to_string(paco::scanMinPointsPerParallelPlane(cloud.points.size(), 0));
@@ -230,7 +230,7 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--min-points must be 0 (1.5 % of the points) or at least 3, got 2"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-parallel-points 2", &log), 2)
       << log;
-  EXPECT_NE(log.find("--min-parallel-points must be -2 (by assembler), -1 (none), 0 (0.5 % of the points) or at least 3, got 2"),
+  EXPECT_NE(log.find("--min-parallel-points must be -1 (none), 0 (0.5 % of the points) or at least 3, got 2"),
             std::string::npos)
       << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;

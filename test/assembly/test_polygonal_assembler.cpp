@@ -329,6 +329,38 @@ TEST(PolyFit, CandidateFaceBudgetLeavesOutTheLeastConfidentPrimitives) {
   }
 }
 
+TEST(PolyFit, WarmStartIsTheCellComplexSurfaceAndKeepsTheOptimum) {
+  auto assemble = [](const SurfaceMesh& truth, bool warm_start, const std::string& solver, SurfaceMesh& mesh) {
+    paco::PolygonalAssembler assembler;
+    assembler.setInputPrimitives(primitivesOf(truth));
+    assembler.setWarmStart(warm_start);
+    assembler.setMipSolver(solver);
+    assembler.setTimeLimit(60);
+    return assembler.reconstruct(mesh);
+  };
+  // A box's surface is exactly the six middle pieces of its planes' arrangement.
+  SurfaceMesh box_mesh;
+  const paco::AssemblyResult box = assemble(paco::test::makeBox({0, 0, 0}, {1, 0.7, 0.4}), true, "cbc", box_mesh);
+  ASSERT_TRUE(box.ok()) << box.message;
+  EXPECT_EQ(box.num_warm_start_faces, 6u);
+  EXPECT_EQ(box_mesh.faces.size(), 6u);
+
+  for (const auto& shape : shapes()) {
+    SCOPED_TRACE(shape.name);
+    SurfaceMesh warm_mesh, cold_mesh, glpk_mesh;
+    const paco::AssemblyResult warm = assemble(shape.mesh, true, "cbc", warm_mesh);
+    const paco::AssemblyResult cold = assemble(shape.mesh, false, "cbc", cold_mesh);
+    const paco::AssemblyResult glpk = assemble(shape.mesh, true, "glpk", glpk_mesh);
+    ASSERT_TRUE(warm.ok() && cold.ok() && glpk.ok()) << warm.message << cold.message << glpk.message;
+    EXPECT_TRUE(warm.solution_is_optimal);
+    EXPECT_GE(warm.num_warm_start_faces, shape.planar_faces);
+    EXPECT_EQ(cold.num_warm_start_faces, 0u);
+    EXPECT_EQ(glpk.num_warm_start_faces, 0u);  // GLPK takes no start
+    EXPECT_EQ(countPlanarRegions(warm_mesh), countPlanarRegions(cold_mesh));
+    EXPECT_NEAR(paco::signedVolume(warm_mesh), paco::signedVolume(cold_mesh), 1e-9 * paco::signedVolume(cold_mesh));
+  }
+}
+
 // --- failures --------------------------------------------------------------------------------
 
 class AssemblyFailures : public ::testing::TestWithParam<std::string> {

@@ -187,11 +187,7 @@ TEST(PlanarSegmenter, ScanParallelMinimumIsAShareUnlessACountOrOffIsAsked) {
   EXPECT_EQ(scanMinPointsPerParallelPlane(100, 0), 3);
   EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 15), 15);
   EXPECT_EQ(scanMinPointsPerParallelPlane(2048, -1), 0);  // off
-  // The tools' default: the share for the cell complex, none for PolyFit.
-  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, kScanParallelPlanesAuto, /*for_polyfit=*/false), 10);
-  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, kScanParallelPlanesAuto, /*for_polyfit=*/true), 0);
-  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 0, /*for_polyfit=*/true), 10);
-  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 12, /*for_polyfit=*/true), 12);
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, -2), 0);  // any other negative: off
 }
 
 // Labels two known large planes and nothing else, so that the parallel-plane pass is all that

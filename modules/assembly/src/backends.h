@@ -20,6 +20,8 @@ struct BackendOutcome {
   /// polyfit: primitives left out to keep the candidate faces within the budget (indices into
   /// the backend's input, least confident first).
   std::vector<std::size_t> dropped_for_budget;
+  /// polyfit: how many candidate faces the start solution selected (0: no start given).
+  std::size_t start_faces = 0;
 };
 
 struct PolyFitOptions {
@@ -30,6 +32,10 @@ struct PolyFitOptions {
   /// When the candidate faces exceed this (0: no limit), the least confident primitives with
   /// confidence < 1 are left out until they fit: the MIP grows much faster than the planes.
   std::size_t max_candidate_faces = 0;
+  /// A closed solid bounded by (some of) the same planes, in the same frame, or null. The
+  /// candidate faces that separate its inside from its outside are given to CBC as a starting
+  /// solution, so that a time-out still returns at least that surface.
+  const SurfaceMesh* start_solid = nullptr;
 };
 
 BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const PolyFitOptions& options,

@@ -12,6 +12,7 @@
 #include <glpk.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -27,6 +28,9 @@ struct MipSettings {
   /// Run CBC in a child process: a failed assertion inside Clp (seen on degenerate programs)
   /// then fails this solve instead of aborting the caller.
   bool isolate = true;
+  /// Values of the first start.size() variables from a known feasible solution, handed to CBC as
+  /// a MIP start (empty: none). The rest are completed by CBC; GLPK ignores it.
+  std::vector<double> start;
 };
 
 struct MipOutcome {
@@ -131,9 +135,19 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     CbcRun run;
     if (settings.isolate) {
       // A hard wall-clock bound as well, in case CBC overruns its own limit.
-      const double grace = std::max(10.0, 0.5 * settings.seconds);
-      const ChildProcessResult child =
-          runInChildProcess([&] { return solveWithCbc(program, settings).serialise(); }, settings.seconds + grace);
+      const auto start = std::chrono::steady_clock::now();
+      auto solveInChild = [&](const MipSettings& s) {
+        const double grace = std::max(10.0, 0.5 * s.seconds);
+        return runInChildProcess([&] { return solveWithCbc(program, s).serialise(); }, s.seconds + grace);
+      };
+      ChildProcessResult child = solveInChild(settings);
+      if (!child.ok && !child.timed_out && !child.interrupted && !settings.start.empty()) {
+        // CBC's MIP-start path trips a Clp assertion on a few programs: solve again without it.
+        MipSettings cold = settings;
+        cold.start.clear();
+        cold.seconds -= std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (cold.seconds > 0.0) child = solveInChild(cold);
+      }
       if (!child.ok || !run.deserialise(child.output, program.num_columns)) {
         outcome.hit_time_limit = child.timed_out;
         Base::error_message_ = outcome.message =
@@ -217,6 +231,11 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     Cbc_setMaximumSeconds(model, std::max(0.01, settings.seconds));
     Cbc_setLogLevel(model, settings.verbose ? 1 : 0);
     if (!settings.verbose) Cbc_setParameter(model, "log", "0");
+    if (!settings.start.empty() && settings.start.size() <= static_cast<std::size_t>(program.num_columns)) {
+      std::vector<int> columns(settings.start.size());
+      for (std::size_t i = 0; i < columns.size(); ++i) columns[i] = static_cast<int>(i);
+      Cbc_setMIPStartI(model, static_cast<int>(columns.size()), columns.data(), settings.start.data());
+    }
     Cbc_solve(model);
     const double* best = Cbc_bestSolution(model);
     run.optimal = Cbc_isProvenOptimal(model) != 0;

@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <memory>
 #include <tuple>
@@ -45,6 +46,57 @@ Eigen::Matrix3d genericRotation() {
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Generalised winding number of a closed polygon mesh at x (about ±1 inside, 0 outside): the
+// solid angles of a fan triangulation of every face, over 4π (Van Oosterom & Strackee).
+double windingNumber(const SurfaceMesh& solid, const Eigen::Vector3d& x) {
+  double total = 0.0;
+  for (const auto& face : solid.faces)
+    for (std::size_t i = 1; i + 1 < face.size(); ++i) {
+      const Eigen::Vector3d a = solid.vertices[face[0]] - x, b = solid.vertices[face[i]] - x,
+                            c = solid.vertices[face[i + 1]] - x;
+      const double la = a.norm(), lb = b.norm(), lc = c.norm();
+      const double numerator = a.dot(b.cross(c));
+      const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+      total += 2.0 * std::atan2(numerator, denominator);
+    }
+  return total / (4.0 * 3.14159265358979323846);
+}
+
+// 1 for each candidate face (in CGAL's order, which is the order of its face variables) that
+// separates the inside of `solid` from its outside, 0 otherwise. `back` turns candidate
+// coordinates into the solid's frame.
+std::vector<double> facesOnSolidBoundary(const Reconstruction& reconstruction, const SurfaceMesh& solid,
+                                         const Eigen::Matrix3d& back) {
+  // Far below the spacing of distinct planes (the frame has unit diagonal), far above rounding.
+  constexpr double kProbe = 1e-5;
+  CgalMesh candidates;
+  reconstruction.output_candidate_faces(candidates);
+  std::vector<double> selected;
+  selected.reserve(candidates.number_of_faces());
+  for (auto f : candidates.faces()) {
+    std::vector<Eigen::Vector3d> corners;
+    for (auto v : CGAL::vertices_around_face(candidates.halfedge(f), candidates)) {
+      const Point& p = candidates.point(v);
+      corners.push_back(back * Eigen::Vector3d(p.x(), p.y(), p.z()));
+    }
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < corners.size(); ++i) {
+      centroid += corners[i];
+      normal += corners[i].cross(corners[(i + 1) % corners.size()]);  // Newell
+    }
+    centroid /= static_cast<double>(std::max<std::size_t>(1, corners.size()));
+    bool boundary = false;
+    if (normal.norm() > 0.0) {
+      normal.normalize();
+      const bool front = std::abs(windingNumber(solid, centroid + kProbe * normal)) > 0.5;
+      const bool rear = std::abs(windingNumber(solid, centroid - kProbe * normal)) > 0.5;
+      boundary = front != rear;
+    }
+    selected.push_back(boundary ? 1.0 : 0.0);
+  }
+  return selected;
 }
 
 }  // namespace
@@ -137,7 +189,14 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
     return outcome;
   }
 
-  mipSettings() = MipSettings{left, options.verbose};
+  mipSettings() = MipSettings{};
+  mipSettings().seconds = left;
+  mipSettings().verbose = options.verbose;
+  if (options.start_solid && !options.start_solid->faces.empty()) {
+    mipSettings().start = facesOnSolidBoundary(*reconstruction, *options.start_solid, rotation.transpose());
+    outcome.start_faces =
+        static_cast<std::size_t>(std::count(mipSettings().start.begin(), mipSettings().start.end(), 1.0));
+  }
   mipOutcome() = MipOutcome{};
   CgalMesh result;
   bool solved = false;

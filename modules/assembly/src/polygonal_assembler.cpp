@@ -298,6 +298,34 @@ bool PolygonalAssembler::initCompute() {
   return true;
 }
 
+void PolygonalAssembler::runCellComplexWithRetries(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh,
+                                                   detail::BackendOutcome& outcome) const {
+  // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
+  // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x); as a
+  // last resort relabel one cell at each such edge (the least costly one), which changes the
+  // solid a little but makes it a manifold.
+  detail::CellComplexOptions options;
+  options.smoothness = smoothness_;
+  const std::pair<double, bool> attempts[] = {{1.0, false}, {2.0, false}, {4.0, false}, {1.0, true}};
+  for (const auto& [factor, resolve] : attempts) {
+    if (extent_margin_ == 0.0 && factor != 1.0) continue;
+    options.extent_margin = extent_margin_ * factor;
+    options.resolve_crossings = resolve;
+    options.seconds = secondsLeft();
+    SurfaceMesh attempt;
+    detail::BackendOutcome attempt_outcome = detail::runCellComplex(primitives, options, attempt);
+    const bool first = factor == 1.0 && !resolve;
+    if (attempt_outcome.status != AssemblyStatus::Success) {
+      if (first) outcome = attempt_outcome, mesh = std::move(attempt);
+      break;
+    }
+    SurfaceMesh check = attempt;
+    const bool watertight = postProcess(check).isClosedManifold();
+    if (first || watertight) outcome = attempt_outcome, mesh = std::move(attempt);
+    if (watertight || secondsLeft() <= 0.0) break;
+  }
+}
+
 void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh) {
   detail::BackendOutcome outcome;
   if (backend_ == AssemblyBackend::PolyFit) {
@@ -309,7 +337,26 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     options.seconds = secondsLeft();
     options.verbose = verbose_;
     options.max_candidate_faces = max_candidate_faces_;
+    // The warm start: the cell complex on the same planes, refitted to their points as CGAL
+    // refits them, so that its faces lie on PolyFit's candidate faces.
+    SurfaceMesh start_solid;
+    if (warm_start_ && solver_ == MipSolver::Cbc) {
+      std::vector<PlanarPrimitive> refitted = primitives;
+      for (auto& primitive : refitted) primitive.plane = refit(primitive.points, primitive.plane);
+      // PolyFit allows no edge with four faces: relabel cells at such edges right away.
+      detail::CellComplexOptions cell_options;
+      cell_options.smoothness = smoothness_;
+      cell_options.extent_margin = extent_margin_;
+      cell_options.resolve_crossings = true;
+      cell_options.seconds = secondsLeft();
+      const detail::BackendOutcome start_outcome = detail::runCellComplex(refitted, cell_options, start_solid);
+      if (start_outcome.status != AssemblyStatus::Success || !postProcess(start_solid).isClosedManifold())
+        start_solid = SurfaceMesh{};
+      options.seconds = secondsLeft();
+      if (!start_solid.faces.empty()) options.start_solid = &start_solid;
+    }
     outcome = detail::runPolyFit(primitives, options, mesh);
+    result_.num_warm_start_faces = outcome.start_faces;
     if (!outcome.dropped_for_budget.empty()) {
       // used_[j] is the j-th primitive kept by pre-processing, in input order.
       std::vector<std::size_t> input_index;
@@ -341,30 +388,7 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       countFates(result_);
     }
   } else {
-    // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
-    // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x); as a
-    // last resort relabel one cell at each such edge (the least costly one), which changes the
-    // solid a little but makes it a manifold.
-    detail::CellComplexOptions options;
-    options.smoothness = smoothness_;
-    const std::pair<double, bool> attempts[] = {{1.0, false}, {2.0, false}, {4.0, false}, {1.0, true}};
-    for (const auto& [factor, resolve] : attempts) {
-      if (extent_margin_ == 0.0 && factor != 1.0) continue;
-      options.extent_margin = extent_margin_ * factor;
-      options.resolve_crossings = resolve;
-      options.seconds = secondsLeft();
-      SurfaceMesh attempt;
-      detail::BackendOutcome attempt_outcome = detail::runCellComplex(primitives, options, attempt);
-      const bool first = factor == 1.0 && !resolve;
-      if (attempt_outcome.status != AssemblyStatus::Success) {
-        if (first) outcome = attempt_outcome, mesh = std::move(attempt);
-        break;
-      }
-      SurfaceMesh check = attempt;
-      const bool watertight = postProcess(check).isClosedManifold();
-      if (first || watertight) outcome = attempt_outcome, mesh = std::move(attempt);
-      if (watertight || secondsLeft() <= 0.0) break;
-    }
+    runCellComplexWithRetries(primitives, mesh, outcome);
   }
   result_.solution_is_optimal = outcome.optimal;
   result_.hit_time_limit = outcome.hit_time_limit;

@@ -40,9 +40,9 @@ void checkOptions(const BenchmarkOptions& options) {
     throw InvalidInputError("runBenchmark: the fewest points of a plane must be 0 (a share of the input) or at least 3; got " +
                             std::to_string(options.method.segment_min_points));
   const int parallel = options.method.segment_min_parallel_points;
-  if (parallel != kParallelPlanesByAssembler && parallel != -1 && parallel != 0 && parallel < 3)
-    throw InvalidInputError("runBenchmark: the fewest points of a parallel plane must be -2 (by assembler), -1 (none), "
-                            "0 (a share of the input) or at least 3; got " + std::to_string(parallel));
+  if (parallel != -1 && parallel != 0 && parallel < 3)
+    throw InvalidInputError("runBenchmark: the fewest points of a parallel plane must be -1 (none), 0 (a share of the "
+                            "input) or at least 3; got " + std::to_string(parallel));
   const std::vector<std::string> available = availableMethods();
   for (const auto& m : options.methods) {
     if (std::find(available.begin(), available.end(), m) == available.end()) {

@@ -92,9 +92,8 @@ std::map<std::string, Entry>& registry() {
     segmenter->setInputCloud(in.input.makeShared());
     segmenter->setNumberOfThreads(1);
     segmenter->setMinPointsPerPlane(scanMinPointsPerPlane(in.input.size(), options.segment_min_points));
-    static_assert(kParallelPlanesByAssembler == kScanParallelPlanesAuto, "one meaning of -2");
     segmenter->setMinPointsPerParallelPlane(
-        scanMinPointsPerParallelPlane(in.input.size(), options.segment_min_parallel_points, options.assembler == "polyfit"));
+        scanMinPointsPerParallelPlane(in.input.size(), options.segment_min_parallel_points));
     segmenter->segment(seg);
 #else
     throw InvalidInputError("this build has no paco::segmentation; use the dataset's labels (--dataset-labels)");
@@ -138,6 +137,7 @@ std::map<std::string, Entry>& registry() {
   assembler.setBackend(options.assembler);
   assembler.setTimeLimit(options.time_limit);
   assembler.setMaxCandidateFaces(options.max_candidate_faces);
+  assembler.setWarmStart(options.polyfit_warm_start);
   assembler.setInputPrimitives(primitives);
   SurfaceMesh mesh;
   const auto start = std::chrono::steady_clock::now();

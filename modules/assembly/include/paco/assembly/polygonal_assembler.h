@@ -17,6 +17,10 @@
 
 namespace paco {
 
+namespace detail {
+struct BackendOutcome;
+}
+
 /// Why a reconstruction succeeded or failed.
 enum class AssemblyStatus {
   Success,           ///< a closed, manifold, outward-oriented mesh was produced
@@ -73,6 +77,7 @@ struct AssemblyResult {
   std::size_t num_cells = 0;           ///< cell-complex: cells of the partition
   int num_crossings_resolved = 0;      ///< cell-complex: cells relabelled to remove non-manifold "X" edges
   std::size_t num_variables = 0, num_constraints = 0;  ///< polyfit: size of the MIP
+  std::size_t num_warm_start_faces = 0;  ///< polyfit: candidate faces of the cell-complex start (0: none given)
   MeshTopology topology;               ///< of the output mesh
   double seconds = 0.0;                ///< wall time of reconstruct()
   double seconds_partition = 0.0;      ///< polyfit: candidate generation; cell-complex: partition
@@ -133,6 +138,14 @@ class PolygonalAssembler {
   void setMaxCandidateFaces(std::size_t faces) { max_candidate_faces_ = faces; }
   std::size_t getMaxCandidateFaces() const { return max_candidate_faces_; }
 
+  /// PolyFit: first assemble with the cell complex (tens of milliseconds) and hand the candidate
+  /// faces on its surface to CBC as a starting solution (default true). CBC then has a closed
+  /// surface from the start: where it would find no solution within the budget (common with
+  /// many small planes) it returns at least that one, and a good bound prunes its search.
+  /// The optimum is unchanged. GLPK ignores it.
+  void setWarmStart(bool warm_start) { warm_start_ = warm_start; }
+  bool getWarmStart() const { return warm_start_; }
+
   /// Print the MIP solver's own log to stdout (default false: silent).
   void setVerbose(bool verbose) { verbose_ = verbose; }
 
@@ -191,12 +204,18 @@ class PolygonalAssembler {
   double time_limit_ = 60.0;
   std::size_t max_candidate_faces_ = kDefaultMaxCandidateFaces;
   bool verbose_ = false;
+  bool warm_start_ = true;
   double merge_angle_;
   double merge_distance_ = 0.005;
   std::size_t min_support_ = 10;
   double smoothness_ = 0.2;
   double extent_margin_ = 0.02;
   double start_time_ = 0.0;
+
+ private:
+  /// The cell-complex backend with its retries for a closed manifold (see setExtentMargin).
+  void runCellComplexWithRetries(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh,
+                                 detail::BackendOutcome& outcome) const;
 };
 
 /// Merges near-duplicate planes and drops weakly supported primitives (the pre-processing of

@@ -34,10 +34,6 @@ struct MethodInput {
 constexpr std::size_t kMinInputPointBudget = 256;
 constexpr std::size_t kDefaultInputPointBudget = 20000;
 
-/// MethodOptions::segment_min_parallel_points: decide by the assembler, as the tools do
-/// (paco::kScanParallelPlanesAuto; the segmentation module is optional here).
-constexpr int kParallelPlanesByAssembler = -2;
-
 /// Parameters shared by every method.
 struct MethodOptions {
   /// Assembler backend: "polyfit" (PolyFit + CBC, default) or "cell-complex".
@@ -47,6 +43,9 @@ struct MethodOptions {
   /// PolyFit candidate-face budget (PolygonalAssembler::setMaxCandidateFaces, whose default this
   /// is; 0: none).
   std::size_t max_candidate_faces = 1000;
+  /// PolyFit: start CBC from the cell complex's surface (PolygonalAssembler::setWarmStart, whose
+  /// default this is).
+  bool polyfit_warm_start = true;
   /// Planar segmenter backend for the visible points of `direct`, `box-prior` and `paco`
   /// (default "gocopp").
   std::string segmenter = "gocopp";
@@ -54,10 +53,9 @@ struct MethodOptions {
   /// for paco::scanMinPointsPerPlane of the input's points, as paco_reconstruct, else >= 3.
   int segment_min_points = 0;
   /// Smaller planes parallel to a kept one (PlanarSegmenter::setMinPointsPerParallelPlane), as
-  /// paco::scanMinPointsPerParallelPlane reads it: kScanParallelPlanesAuto (default, as the
-  /// tools) for 0.5 % of the input's points with the cell complex and none with PolyFit; 0 for
-  /// the share with either; > 0 (>= 3) a count; -1 none.
-  int segment_min_parallel_points = kParallelPlanesByAssembler;
+  /// paco::scanMinPointsPerParallelPlane reads it: 0 (default, as the tools) for 0.5 % of the
+  /// input's points; > 0 (>= 3) a count; -1 none.
+  int segment_min_parallel_points = 0;
   /// Use the dataset's labels of the input points instead of running the segmenter (default
   /// false). The dataset's labels are GT face labels unless it was built with the segmenter.
   bool use_dataset_labels = false;

@@ -47,17 +47,12 @@ inline int scanMinPointsPerPlane(std::size_t points, int requested) {
 /// (PlanarSegmenter::setMinPointsPerParallelPlane): 0.5 %, 10 of a 2,048-point input.
 constexpr double kScanMinParallelPlaneFraction = 0.005;
 
-/// The tools' default request for scanMinPointsPerParallelPlane: decide by the assembler.
-constexpr int kScanParallelPlanesAuto = -2;
-
 /// The fewest points of a plane parallel to a larger one the tools give the segmenter of a cloud
-/// of `points` points: `requested` when > 0; 0 (off) when -1; kScanMinParallelPlaneFraction of
-/// the points, rounded and at least 3, when 0, or when kScanParallelPlanesAuto and the planes do
-/// not go to PolyFit. PolyFit's MIP often finds no solution within its time limit once many
-/// small planes are added (doc/results.md, twelfth session), the cell complex only gains.
-inline int scanMinPointsPerParallelPlane(std::size_t points, int requested, bool for_polyfit = false) {
+/// of `points` points: `requested` when > 0; 0 (off) when negative; kScanMinParallelPlaneFraction of
+/// the points, rounded and at least 3, when 0 (the tools' default).
+inline int scanMinPointsPerParallelPlane(std::size_t points, int requested) {
   if (requested > 0) return requested;
-  if (requested == kScanParallelPlanesAuto ? for_polyfit : requested != 0) return 0;
+  if (requested != 0) return 0;
   const double share = kScanMinParallelPlaneFraction * static_cast<double>(points) + 0.5;
   return share < 3.0 ? 3 : static_cast<int>(share);
 }
