@@ -155,15 +155,16 @@ int run(int argc, char** argv) {
                 result.num_merged, result.num_dropped);
   if (!result.ok())
     throw paco::Error("assembly failed (" + paco::toString(result.status) + "): " + result.message);
-  if (assembler.getBackend() == paco::AssemblyBackend::PolyFit)
+  if (assembler.getBackend() == paco::AssemblyBackend::PolyFit) {
     std::printf("polyfit: %zu candidate faces (%.3f s), MIP %zu variables x %zu constraints solved %s in %.3f s\n",
                 result.num_candidate_faces, result.seconds_partition, result.num_variables, result.num_constraints,
                 result.solution_is_optimal ? "to optimality" : "(not proven optimal)", result.seconds_solve);
-  if (result.num_warm_start_faces)
-    std::printf("polyfit: started from the cell complex's surface (%zu candidate faces)\n", result.num_warm_start_faces);
-  else
+    if (result.num_warm_start_faces)
+      std::printf("polyfit: started from the cell complex's surface (%zu candidate faces)\n", result.num_warm_start_faces);
+  } else {
     std::printf("cell-complex: %zu cells (%.3f s), %zu cell faces, labelling and mesh %.3f s\n", result.num_cells,
                 result.seconds_partition, result.num_candidate_faces, result.seconds_solve);
+  }
   if (result.hit_time_limit) std::printf("note: the time limit was reached; the best solution found is used\n");
 
   timer.start("save");

@@ -25,15 +25,21 @@ TEST(PacoAssemble, AssemblesVertexGroupsWithBothBackends) {
   TempDir dir;
   const paco::SurfaceMesh truth = paco::test::makeLBracket();
   paco::io::saveVertexGroups(dir.file("bracket.bvg"), paco::io::toVertexGroups(paco::test::primitivesOf(truth)));
-  for (const std::string backend : {"polyfit", "cell-complex"}) {
-    SCOPED_TRACE(backend);
-    const std::string mesh_path = dir.file("bracket_" + backend + ".obj");
+  for (const std::string options : {"--backend polyfit", "--backend polyfit --no-warm-start", "--backend cell-complex"}) {
+    SCOPED_TRACE(options);
+    const bool polyfit = options.find("polyfit") != std::string::npos;
+    const bool warm_start = polyfit && options.find("--no-warm-start") == std::string::npos;
+    const std::string mesh_path = dir.file(std::string("bracket_") + (polyfit ? "polyfit" : "cell_complex") + ".obj");
     std::string out;
     const int rc = paco::test::runCommand(tool() + " " + quoted(dir.file("bracket.bvg")) + " -o " + quoted(mesh_path) +
-                                              " --backend " + backend, &out);
+                                              " " + options, &out);
     ASSERT_EQ(rc, 0) << out;
     EXPECT_NE(out.find("closed"), std::string::npos) << out;
     EXPECT_NE(out.find("8 planes used"), std::string::npos) << out;
+    // One line on the backend's work, and for PolyFit whether CBC started from the cell complex.
+    EXPECT_EQ(out.find("polyfit: ") != std::string::npos, polyfit) << out;
+    EXPECT_EQ(out.find("cell-complex: ") != std::string::npos, !polyfit) << out;
+    EXPECT_EQ(out.find("started from the cell complex's surface") != std::string::npos, warm_start) << out;
     const paco::SurfaceMesh mesh = paco::io::loadMesh(mesh_path);
     EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
     EXPECT_NEAR(paco::signedVolume(mesh), paco::signedVolume(truth), 0.01 * paco::signedVolume(truth));

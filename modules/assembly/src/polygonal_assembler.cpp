@@ -298,34 +298,6 @@ bool PolygonalAssembler::initCompute() {
   return true;
 }
 
-void PolygonalAssembler::runCellComplexWithRetries(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh,
-                                                   detail::BackendOutcome& outcome) const {
-  // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
-  // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x); as a
-  // last resort relabel one cell at each such edge (the least costly one), which changes the
-  // solid a little but makes it a manifold.
-  detail::CellComplexOptions options;
-  options.smoothness = smoothness_;
-  const std::pair<double, bool> attempts[] = {{1.0, false}, {2.0, false}, {4.0, false}, {1.0, true}};
-  for (const auto& [factor, resolve] : attempts) {
-    if (extent_margin_ == 0.0 && factor != 1.0) continue;
-    options.extent_margin = extent_margin_ * factor;
-    options.resolve_crossings = resolve;
-    options.seconds = secondsLeft();
-    SurfaceMesh attempt;
-    detail::BackendOutcome attempt_outcome = detail::runCellComplex(primitives, options, attempt);
-    const bool first = factor == 1.0 && !resolve;
-    if (attempt_outcome.status != AssemblyStatus::Success) {
-      if (first) outcome = attempt_outcome, mesh = std::move(attempt);
-      break;
-    }
-    SurfaceMesh check = attempt;
-    const bool watertight = postProcess(check).isClosedManifold();
-    if (first || watertight) outcome = attempt_outcome, mesh = std::move(attempt);
-    if (watertight || secondsLeft() <= 0.0) break;
-  }
-}
-
 void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh) {
   detail::BackendOutcome outcome;
   if (backend_ == AssemblyBackend::PolyFit) {
@@ -388,7 +360,30 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       countFates(result_);
     }
   } else {
-    runCellComplexWithRetries(primitives, mesh, outcome);
+    // A sliver cell labelled wrongly where a plane's extent ends can leave two solids touching
+    // along an edge. The partition is cheap, so retry with planes reaching further (2x, 4x); as a
+    // last resort relabel one cell at each such edge (the least costly one), which changes the
+    // solid a little but makes it a manifold.
+    detail::CellComplexOptions options;
+    options.smoothness = smoothness_;
+    const std::pair<double, bool> attempts[] = {{1.0, false}, {2.0, false}, {4.0, false}, {1.0, true}};
+    for (const auto& [factor, resolve] : attempts) {
+      if (extent_margin_ == 0.0 && factor != 1.0) continue;
+      options.extent_margin = extent_margin_ * factor;
+      options.resolve_crossings = resolve;
+      options.seconds = secondsLeft();
+      SurfaceMesh attempt;
+      detail::BackendOutcome attempt_outcome = detail::runCellComplex(primitives, options, attempt);
+      const bool first = factor == 1.0 && !resolve;
+      if (attempt_outcome.status != AssemblyStatus::Success) {
+        if (first) outcome = attempt_outcome, mesh = std::move(attempt);
+        break;
+      }
+      SurfaceMesh check = attempt;
+      const bool watertight = postProcess(check).isClosedManifold();
+      if (first || watertight) outcome = attempt_outcome, mesh = std::move(attempt);
+      if (watertight || secondsLeft() <= 0.0) break;
+    }
   }
   result_.solution_is_optimal = outcome.optimal;
   result_.hit_time_limit = outcome.hit_time_limit;

@@ -17,10 +17,6 @@
 
 namespace paco {
 
-namespace detail {
-struct BackendOutcome;
-}
-
 /// Why a reconstruction succeeded or failed.
 enum class AssemblyStatus {
   Success,           ///< a closed, manifold, outward-oriented mesh was produced
@@ -142,7 +138,8 @@ class PolygonalAssembler {
   /// faces on its surface to CBC as a starting solution (default true). CBC then has a closed
   /// surface from the start: where it would find no solution within the budget (common with
   /// many small planes) it returns at least that one, and a good bound prunes its search.
-  /// The optimum is unchanged. GLPK ignores it.
+  /// The optimum is unchanged. CBC ignores a start that breaks PolyFit's edge rules (rare);
+  /// GLPK takes none.
   void setWarmStart(bool warm_start) { warm_start_ = warm_start; }
   bool getWarmStart() const { return warm_start_; }
 
@@ -211,11 +208,6 @@ class PolygonalAssembler {
   double smoothness_ = 0.2;
   double extent_margin_ = 0.02;
   double start_time_ = 0.0;
-
- private:
-  /// The cell-complex backend with its retries for a closed manifold (see setExtentMargin).
-  void runCellComplexWithRetries(const std::vector<PlanarPrimitive>& primitives, SurfaceMesh& mesh,
-                                 detail::BackendOutcome& outcome) const;
 };
 
 /// Merges near-duplicate planes and drops weakly supported primitives (the pre-processing of
