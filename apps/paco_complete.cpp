@@ -163,7 +163,6 @@ int run(int argc, char** argv) {
     }
   } else {
     segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
-    // The primitives go to paco_assemble, PolyFit by default.
     segmenter->setMinPointsPerParallelPlane(
         paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points));
     segmenter->setInputCloud(cloud);

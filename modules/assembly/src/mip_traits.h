@@ -135,7 +135,7 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     CbcRun run;
     if (settings.isolate) {
       // A hard wall-clock bound as well, in case CBC overruns its own limit.
-      const auto start = std::chrono::steady_clock::now();
+      const auto began = std::chrono::steady_clock::now();
       auto solveInChild = [&](const MipSettings& s) {
         const double grace = std::max(10.0, 0.5 * s.seconds);
         return runInChildProcess([&] { return solveWithCbc(program, s).serialise(); }, s.seconds + grace);
@@ -145,7 +145,7 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
         // CBC's MIP-start path trips a Clp assertion on a few programs: solve again without it.
         MipSettings cold = settings;
         cold.start.clear();
-        cold.seconds -= std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        cold.seconds -= std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
         if (cold.seconds > 0.0) child = solveInChild(cold);
       }
       if (!child.ok || !run.deserialise(child.output, program.num_columns)) {

@@ -30,12 +30,17 @@ namespace paco {
 /// scans out (doc/results.md, "Smaller planes").
 constexpr double kScanMinPlaneFraction = 0.015;
 
-/// kScanMinPlaneFraction of `points`, rounded, and at least 3: the tools' default
-/// PlanarSegmenter::setMinPointsPerPlane for a cloud of that many points.
-inline int scanMinPointsPerPlane(std::size_t points) {
-  const double share = kScanMinPlaneFraction * static_cast<double>(points) + 0.5;
+namespace detail {
+/// `fraction` of `points`, rounded, and at least 3 (the fewest points of any plane).
+inline int shareOfPoints(std::size_t points, double fraction) {
+  const double share = fraction * static_cast<double>(points) + 0.5;
   return share < 3.0 ? 3 : static_cast<int>(share);
 }
+}  // namespace detail
+
+/// kScanMinPlaneFraction of `points`, rounded, and at least 3: the tools' default
+/// PlanarSegmenter::setMinPointsPerPlane for a cloud of that many points.
+inline int scanMinPointsPerPlane(std::size_t points) { return detail::shareOfPoints(points, kScanMinPlaneFraction); }
 
 /// The fewest points per plane the tools give the segmenter of a cloud of `points` points:
 /// `requested` when it is > 0 (--min-points), else scanMinPointsPerPlane(points).
@@ -53,8 +58,7 @@ constexpr double kScanMinParallelPlaneFraction = 0.005;
 inline int scanMinPointsPerParallelPlane(std::size_t points, int requested) {
   if (requested > 0) return requested;
   if (requested != 0) return 0;
-  const double share = kScanMinParallelPlaneFraction * static_cast<double>(points) + 0.5;
-  return share < 3.0 ? 3 : static_cast<int>(share);
+  return detail::shareOfPoints(points, kScanMinParallelPlaneFraction);
 }
 
 /// Base of every planar segmentation backend, shaped like a PCL algorithm: setInputCloud,
