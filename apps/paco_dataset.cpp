@@ -56,6 +56,7 @@ struct Options {
   int dense_points = 16384;
   bool segment = false;
   int segment_min_points = 0;
+  int segment_min_parallel_points = -1;
   bool verify_mode = false;
   // --export
   bool export_mode = false;
@@ -234,6 +235,9 @@ int run(int argc, char** argv) {
       ("segment", po::bool_switch(&o.segment), "label inputs with PlanarSegmenter (default: GT faces of the visible points)")
       ("segment-min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points),
        "with --segment: the smallest plane in points; 0: 1.5 % of each input's points, as paco_reconstruct does")
+      ("segment-min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
+       "with --segment: the smallest plane parallel to a larger one, in points; 0: 0.5 % of each input's points, "
+       "as paco_reconstruct does; negative: none")
       ("verify", po::bool_switch(&o.verify_mode), "read a dataset back: DATASET_DIR (with --limit: N samples per split)")
       ("export", po::bool_switch(&o.export_mode), "export one sample: DATASET_DIR OUT.pcd")
       ("export-mesh", po::value(&o.export_mesh), "with --export: also write the GT mesh (normalised frame) here")
@@ -274,6 +278,8 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--segment-min-points must be >= 0 (0: 1.5 % of each input's points)");
   if (o.segment_min_points > 0 && !o.segment)
     throw paco::app::UsageError("--segment-min-points needs --segment");
+  if (o.segment_min_parallel_points >= 0 && !o.segment)
+    throw paco::app::UsageError("--segment-min-parallel-points needs --segment");
 
   paco::data::BuildOptions build;
   paco::data::DatasetInfo& info = build.info;
@@ -288,6 +294,7 @@ int run(int argc, char** argv) {
   info.dense_points = o.dense_points;
   info.input_labels_from_segmenter = o.segment;
   info.segment_min_points = o.segment_min_points;
+  info.segment_min_parallel_points = o.segment_min_parallel_points;
   build.segment = o.segment;
   if (!o.augment_scale.empty()) {
     double lo = 0, hi = 0;

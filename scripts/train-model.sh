@@ -4,7 +4,8 @@
 # (the dataset build and the training both resume).
 #
 #   scripts/train-model.sh WORK_DIR [--init-from MODEL.pt] [--epochs N] [--seed S] [--jitter J]
-#                          [--orientation as-is|seen-planes] [--segment-min-points N] [--run NAME]
+#                          [--orientation as-is|seen-planes] [--segment-min-points N]
+#                          [--segment-min-parallel-points N] [--run NAME]
 #                          [-- PACO_TRAIN_OPTIONS...]
 #
 # --init-from starts a new run from a model's weights (e.g. models/paco_cpu.pt, to go on training
@@ -16,14 +17,17 @@
 # under WORK_DIR (default: run). --segment-min-points is paco_dataset's: 0 (default) labels the
 # inputs with planes of 1.5 % of their points, as paco_reconstruct segments, into WORK_DIR/data;
 # N > 0 uses planes of N points, into WORK_DIR/data_minN (the models up to the eleventh session's
-# were trained on --segment-min-points 50). Options after "--" go to paco_train as they are (e.g.
-# --quality-classification --lr 5e-5 --limit-train 16000); pass them again when resuming.
+# were trained on --segment-min-points 50). --segment-min-parallel-points is paco_dataset's too:
+# N >= 0 also labels small planes parallel to a larger one (0: 0.5 % of the points, as the tools
+# do by default), into a folder with the suffix _parN; the default, -1, labels none. Options
+# after "--" go to paco_train as they are (e.g. --quality-classification --lr 5e-5
+# --limit-train 16000); pass them again when resuming.
 # Needs the MFCAD meshes in ../shared/data/mfcad (or MFCAD_DIR) and a Release build in build/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 if [ $# -lt 1 ]; then
-  sed -n 2,21p "$0" >&2
+  sed -n 2,25p "$0" >&2
   exit 2
 fi
 work=$1
@@ -35,6 +39,7 @@ jitter=0
 orientation=""
 run_name=run
 segment_min_points=0
+segment_min_parallel_points=-1
 while [ $# -gt 0 ]; do
   case "$1" in
     --init-from) init_from=$2; shift 2 ;;
@@ -44,6 +49,7 @@ while [ $# -gt 0 ]; do
     --orientation) orientation=$2; shift 2 ;;
     --run) run_name=$2; shift 2 ;;
     --segment-min-points) segment_min_points=$2; shift 2 ;;
+    --segment-min-parallel-points) segment_min_parallel_points=$2; shift 2 ;;
     --) shift; break ;;
     *) echo "train-model.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
@@ -80,8 +86,10 @@ echo "train-model.sh: $(ls "$subset" | wc -l) meshes in the training subset"
 # (the segmenter the pipeline uses). About 5 min on 2 cores.
 data="$work/data"
 if [ "$segment_min_points" != 0 ]; then data="$work/data_min$segment_min_points"; fi
+if [ "$segment_min_parallel_points" -ge 0 ]; then data="${data}_par$segment_min_parallel_points"; fi
 build/apps/paco_dataset "$subset" "$data" --augment-scale 0.5,2 --augment-rotate --segment \
-  --segment-min-points "$segment_min_points" --views 4 --jobs 2 --seed 1
+  --segment-min-points "$segment_min_points" --segment-min-parallel-points "$segment_min_parallel_points" \
+  --views 4 --jobs 2 --seed 1
 
 run="$work/$run_name"
 args=("$data" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 --augment-offset 0.05

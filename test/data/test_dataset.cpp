@@ -117,7 +117,7 @@ std::map<int, int> segmentSizes(const std::vector<int>& labels) {
   return sizes;
 }
 
-TEST(DatasetBuild, SegmentMinPointsIsTheSmallestSegmentAndZeroMeansTheToolsShare) {
+TEST(DatasetBuild, SegmentMinimumsAreTheSmallestSegmentsAndZeroMeansTheToolsShare) {
   if (!segmentationAvailable()) GTEST_SKIP() << "built without the segmentation module";
   BuildOptions options = smallOptions();
   options.info.levels = {0};
@@ -144,9 +144,22 @@ TEST(DatasetBuild, SegmentMinPointsIsTheSmallestSegmentAndZeroMeansTheToolsShare
 
   options.info.segment_min_points = -1;
   EXPECT_THROW(buildPart("p", part, options), paco::InvalidInputError);
+
+  // Small planes parallel to a larger one are added as the tools add them: more segments than
+  // with the 300-point rule alone, none below the parallel minimum.
+  options.info.segment_min_points = 300;
+  options.info.segment_min_parallel_points = 15;
+  const PartSamples with_parallel = buildPart("p", part, options);
+  std::size_t parallel_segments = 0;
+  for (const auto& sample : with_parallel.samples) {
+    const auto sizes = segmentSizes(sample.labels);
+    for (const auto& [label, size] : sizes) EXPECT_GE(size, 15) << "segment " << label;
+    parallel_segments += sizes.size();
+  }
+  EXPECT_GT(parallel_segments, coarse_segments);
 }
 
-TEST(DatasetInfo, SegmentMinPointsIsRecordedAndOldInfoFilesMeanFifty) {
+TEST(DatasetInfo, SegmentMinimumsAreRecordedAndOldInfoFilesMeanFiftyWithoutParallelPlanes) {
   DatasetInfo info;
   info.input_labels_from_segmenter = true;
   info.segment_min_points = 0;
@@ -158,6 +171,16 @@ TEST(DatasetInfo, SegmentMinPointsIsRecordedAndOldInfoFilesMeanFifty) {
   // Written before the key existed: segmented with PlanarSegmenter's default, 50 points.
   const DatasetInfo old = DatasetInfo::parse("format_version\t1\ninput_labels_from_segmenter\t1\n", "old");
   EXPECT_EQ(old.segment_min_points, 50);
+  EXPECT_EQ(old.segment_min_parallel_points, -1);  // and without small parallel planes
+  info.segment_min_parallel_points = 0;
+  EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_parallel_points, 0);
+  EXPECT_NE(info.describe().find("parallel to a larger one of at least 0.5 %"), std::string::npos);
+  info.segment_min_parallel_points = 12;
+  EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_parallel_points, 12);
+  // Without parallel planes the info file is the one written before the key existed, so such
+  // datasets keep their identity and resume.
+  info.segment_min_parallel_points = -1;
+  EXPECT_EQ(info.serialize().find("segment_min_parallel_points"), std::string::npos);
   // Unsegmented datasets do not record it, so it never tells them apart.
   DatasetInfo plain;
   plain.segment_min_points = 0;

@@ -76,6 +76,8 @@ TEST(PacoDatasetTool, BadMeshesAreListedNotFatal) {
   EXPECT_NE(log.find("--segment-min-points must be >= 0"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(build_new + " --segment-min-points 40", &log), 2);
   EXPECT_NE(log.find("needs --segment"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(build_new + " --segment-min-parallel-points 0", &log), 2);
+  EXPECT_NE(log.find("--segment-min-parallel-points needs --segment"), std::string::npos) << log;
   EXPECT_FALSE(std::filesystem::exists(dir.file("ds2")));
   EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --help", &log), 0);
 }

@@ -108,6 +108,8 @@ PartSamples buildPart(const std::string& part, const SurfaceMesh& mesh, const Bu
         segmenter->setInputCloud(cloud);
         segmenter->setNumberOfThreads(1);
         segmenter->setMinPointsPerPlane(scanMinPointsPerPlane(cloud->size(), info.segment_min_points));
+        segmenter->setMinPointsPerParallelPlane(
+            scanMinPointsPerParallelPlane(cloud->size(), info.segment_min_parallel_points));
         PlanarSegmentation segmentation;
         segmenter->segment(segmentation);
         sample.labels = segmentation.labels;

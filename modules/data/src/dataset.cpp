@@ -112,6 +112,9 @@ std::string DatasetInfo::serialize() const {
       << "input_labels_from_segmenter\t" << (input_labels_from_segmenter ? 1 : 0) << "\n";
   // Only segmented inputs have a smallest plane; older readers ignore the key.
   if (input_labels_from_segmenter) out << "segment_min_points\t" << segment_min_points << "\n";
+  // Written only when asked for, so that datasets without it keep their info file (and identity).
+  if (input_labels_from_segmenter && segment_min_parallel_points >= 0)
+    out << "segment_min_parallel_points\t" << segment_min_parallel_points << "\n";
   out << "source\t" << source << "\n";
   return out.str();
 }
@@ -148,6 +151,7 @@ DatasetInfo DatasetInfo::parse(const std::string& text, const std::string& where
       else if (key == "dense_points") info.dense_points = std::stoi(value);
       else if (key == "input_labels_from_segmenter") info.input_labels_from_segmenter = value == "1";
       else if (key == "segment_min_points") info.segment_min_points = std::stoi(value);
+      else if (key == "segment_min_parallel_points") info.segment_min_parallel_points = std::stoi(value);
       else if (key == "source") info.source = value;
       // Unknown keys are ignored: a newer writer may add information.
     }
@@ -183,7 +187,13 @@ std::string DatasetInfo::describe() const {
       << (input_labels_from_segmenter
               ? "PlanarSegmenter, planes of at least " +
                     (segment_min_points > 0 ? std::to_string(segment_min_points) + " points"
-                                            : std::string("1.5 % of the input's points (the tools' rule)"))
+                                            : std::string("1.5 % of the input's points (the tools' rule)")) +
+                    (segment_min_parallel_points < 0
+                         ? std::string()
+                         : ", planes parallel to a larger one of at least " +
+                               (segment_min_parallel_points > 0
+                                    ? std::to_string(segment_min_parallel_points) + " points"
+                                    : std::string("0.5 % of the input's points (the tools' default)")))
               : std::string("ground-truth faces of the visible points (not PlanarSegmenter)"))
       << "\npoints: " << input_points << " per input, " << gt_points << " ground truth, cut from " << dense_points
       << " dense\nseed: " << seed << "\nsource: " << source << "\n";

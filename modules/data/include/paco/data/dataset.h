@@ -92,6 +92,11 @@ struct DatasetInfo {
   /// paco::scanMinPointsPerPlane of each input (1.5 %, the tools' rule). Datasets written before
   /// this key existed were segmented with the class default, 50.
   int segment_min_points = 50;
+  /// With input_labels_from_segmenter: the smallest plane parallel to a larger one, in points
+  /// (PlanarSegmenter::setMinPointsPerParallelPlane); 0 means paco::scanMinPointsPerParallelPlane
+  /// of each input (0.5 %, the tools' default), negative means none. Datasets written before
+  /// this key existed had none.
+  int segment_min_parallel_points = -1;
   std::string source;                 ///< mesh folder or "procedural"
 
   /// Human-readable summary, one line per property.
