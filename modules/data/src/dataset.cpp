@@ -183,19 +183,19 @@ std::string DatasetInfo::describe() const {
   if (!scaled && !augment_rotate) out << "none";
   if (scaled) out << "anisotropic scale per axis in [" << augment_scale_min << ", " << augment_scale_max << "]";
   if (augment_rotate) out << (scaled ? ", " : "") << "random rotation";
-  out << "\ninput labels: "
-      << (input_labels_from_segmenter
-              ? "PlanarSegmenter, planes of at least " +
-                    (segment_min_points > 0 ? std::to_string(segment_min_points) + " points"
-                                            : std::string("1.5 % of the input's points (the tools' rule)")) +
-                    (segment_min_parallel_points < 0
-                         ? std::string()
-                         : ", planes parallel to a larger one of at least " +
-                               (segment_min_parallel_points > 0
-                                    ? std::to_string(segment_min_parallel_points) + " points"
-                                    : std::string("0.5 % of the input's points (the tools' default)")))
-              : std::string("ground-truth faces of the visible points (not PlanarSegmenter)"))
-      << "\npoints: " << input_points << " per input, " << gt_points << " ground truth, cut from " << dense_points
+  out << "\ninput labels: ";
+  if (!input_labels_from_segmenter) {
+    out << "ground-truth faces of the visible points (not PlanarSegmenter)";
+  } else {
+    out << "PlanarSegmenter, planes of at least "
+        << (segment_min_points > 0 ? std::to_string(segment_min_points) + " points"
+                                   : std::string("1.5 % of the input's points (the tools' rule)"));
+    if (segment_min_parallel_points >= 0)
+      out << ", planes parallel to a larger one of at least "
+          << (segment_min_parallel_points > 0 ? std::to_string(segment_min_parallel_points) + " points"
+                                              : std::string("0.5 % of the input's points (the tools' default)"));
+  }
+  out << "\npoints: " << input_points << " per input, " << gt_points << " ground truth, cut from " << dense_points
       << " dense\nseed: " << seed << "\nsource: " << source << "\n";
   return out.str();
 }
