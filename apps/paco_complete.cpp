@@ -13,7 +13,6 @@
 #include <paco/common/progress.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model.h>
-#include <paco/encoding/plane_proxy_encoder.h>
 #include <paco/io/cloud_io.h>
 #include <paco/io/vertex_groups_io.h>
 #include <paco/segmentation/segmentation.h>
@@ -39,6 +38,7 @@ struct Options {
   int min_parallel_points = 0;
   double epsilon = 0.004;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
+  int turns = paco::TurnEnsembleOptions().turns;
   bool no_fusion = false;
   paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   int threads = 0;
@@ -82,6 +82,7 @@ int run(int argc, char** argv) {
   paco::app::addMaxPointsOption(visible, o.max_points);
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
+  paco::app::addTurnsOption(visible, o.turns);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -101,6 +102,7 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--pcd must name a .pcd file, got '" + o.pcd + "'");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
+  paco::app::checkTurns(o.turns);
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
@@ -177,24 +179,8 @@ int run(int argc, char** argv) {
                                   "': no planar segment found; is it a piecewise-planar object?");
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
-  timer.start("encode");
-  paco::PlaneProxyEncoder encoder;
-  encoder.setModel(model);
-  encoder.setInputCloud(cloud);
-  encoder.setSegmentation(segmentation);
-  encoder.setNumPoints(o.points);
-  paco::PlaneProxies proxies;
-  encoder.encode(proxies);
-  timer.stop();
-  timer.start("complete");
-  paco::ParametricCompleter completer;
-  completer.setModel(model);
-  completer.setConfidenceThreshold(o.threshold);
-  completer.setInputProxies(proxies);
-  std::vector<paco::PlanarPrimitive> primitives;
-  completer.complete(primitives);
-  timer.stop();
-  paco::app::reportCompletion(primitives.size(), o.threshold, proxies.normalization);
+  std::vector<paco::PlanarPrimitive> primitives =
+      paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns, o.points, timer);
   if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",

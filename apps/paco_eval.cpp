@@ -51,6 +51,7 @@ struct Options {
   // The paco method's defaults, as the library has them.
   paco::app::FusionFlags fusion = fusionFlagsOf(ev::MethodOptions());
   double threshold = ev::MethodOptions().confidence_threshold;
+  int turns = ev::MethodOptions().ensemble_turns;
   int threads = 1;
   bool no_normals = false;
 };
@@ -178,6 +179,9 @@ int dataset(const Options& o) {
   b.method.model = o.model;
   b.method.completion_frame = o.completion_frame;
   b.method.confidence_threshold = o.threshold;
+  if (o.turns < 1 || o.turns > ev::kMaxEnsembleTurns)
+    throw paco::app::UsageError("--turns must be 1 to " + std::to_string(ev::kMaxEnsembleTurns));
+  b.method.ensemble_turns = o.turns;
   b.method.fuse_observed = o.observed_fusion == "on";
   b.method.align_unseen_degrees = o.fusion.align_unseen_degrees;
   b.method.clip_margin = o.fusion.clipMargin();
@@ -234,6 +238,8 @@ int run(int argc, char** argv) {
       ("completion-frame", po::value(&o.completion_frame)->default_value(o.completion_frame),
        "paco: own (the input's own box, as for a user's scan) or complete (the complete shape's frame, the paper's protocol)")
       ("threshold", po::value(&o.threshold)->default_value(o.threshold, paco::app::shortNumber(o.threshold)), "paco: keep completed primitives with confidence above this")
+      ("turns", po::value(&o.turns)->default_value(o.turns),
+       "paco, own frame: run the network on this many 90-degree turns of the input and keep the planes most turns predict (1 to 24; 1: once)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "paco: LibTorch threads")
       ("observed-fusion", po::value(&o.observed_fusion)->default_value(o.observed_fusion),
        "paco: on (seen faces keep their fitted planes and points, the network adds the unseen) or off (the network's primitives alone, as the paper)")

@@ -14,7 +14,6 @@
 #include <paco/common/progress.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model.h>
-#include <paco/encoding/plane_proxy_encoder.h>
 #include <paco/io/cloud_io.h>
 #include <paco/io/mesh_io.h>
 #include <paco/io/vertex_groups_io.h>
@@ -41,6 +40,7 @@ struct Options {
   int min_parallel_points = 0;
   std::string model;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
+  int turns = paco::TurnEnsembleOptions().turns;
   bool no_fusion = false;
   paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   std::string assembler = "polyfit";
@@ -96,6 +96,7 @@ int run(int argc, char** argv) {
   paco::app::addMaxPointsOption(visible, o.max_points);
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
+  paco::app::addTurnsOption(visible, o.turns);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -109,6 +110,7 @@ int run(int argc, char** argv) {
   if (o.input.empty()) throw paco::app::UsageError("expected an INPUT cloud");
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
+  paco::app::checkTurns(o.turns);
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
@@ -170,22 +172,7 @@ int run(int argc, char** argv) {
   if (o.no_completion) {
     primitives = paco::makePrimitives(*cloud, segmentation);
   } else {
-    timer.start("encode");
-    paco::PlaneProxyEncoder encoder;
-    encoder.setModel(model);
-    encoder.setInputCloud(cloud);
-    encoder.setSegmentation(segmentation);
-    paco::PlaneProxies proxies;
-    encoder.encode(proxies);
-    timer.stop();
-    timer.start("complete");
-    paco::ParametricCompleter completer;
-    completer.setModel(model);
-    completer.setConfidenceThreshold(o.threshold);
-    completer.setInputProxies(proxies);
-    completer.complete(primitives);
-    timer.stop();
-    paco::app::reportCompletion(primitives.size(), o.threshold, proxies.normalization);
+    primitives = paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns, paco::TurnEnsembleOptions().num_points, timer);
     if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

@@ -6,6 +6,7 @@
 #include <paco/common/normalization.h>
 #include <paco/completion/checkpoint.h>
 #include <paco/completion/parametric_completer.h>
+#include <paco/completion/turn_ensemble.h>
 #include <paco/encoding/completion_model.h>
 #include <paco/encoding/plane_proxy_encoder.h>
 
@@ -48,6 +49,23 @@ class PublicApi : public ::testing::Test {
     PacoNetwork net(test::tinyModelConfig());
     saveCheckpoint(dir.file("tiny.pt"), net);
     model = CompletionModel::load(dir.file("tiny.pt"));
+  }
+  // Stages 2-3 once, every prediction kept; `proxies` receives the encoder's output.
+  std::vector<PlanarPrimitive> completeAll(const SegmentedBox& input, PlaneProxies& proxies,
+                                           const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity()) const {
+    PlaneProxyEncoder encoder;
+    encoder.setModel(model);
+    encoder.setInputCloud(input.cloud);
+    encoder.setSegmentation(input.segmentation);
+    encoder.setTurn(turn);
+    encoder.encode(proxies);
+    ParametricCompleter completer;
+    completer.setModel(model);
+    completer.setInputProxies(proxies);
+    completer.setConfidenceThreshold(0.0);
+    std::vector<PlanarPrimitive> primitives;
+    completer.complete(primitives);
+    return primitives;
   }
   test::TempDir dir;
   CompletionModel::ConstPtr model;
@@ -199,6 +217,92 @@ TEST_F(PublicApi, SeenPlanesModelCompletesATurnedScanAsTheUnturnedOneTurned) {
   }
 }
 
+TEST_F(PublicApi, AnEncoderTurnReadsTheScanAsTheTurnedScanAndAnswersInTheUsersFrame) {
+  // A turn that swaps two axes, and the box turned by it about its centre.
+  const Eigen::Matrix3d turn = ensembleTurns(kMaxEnsembleTurns)[5];
+  ASSERT_FALSE(turn.cwiseAbs().isIdentity(0.0));  // not a half turn: the box's extents swap
+  const Eigen::Vector3d centre(12, -4, 3.5);
+  SegmentedBox turned;
+  for (auto& p : turned.cloud->points) {
+    p.getVector3fMap() = (centre + turn * (p.getVector3fMap().cast<double>() - centre)).cast<float>();
+    p.getNormalVector3fMap() = (turn * p.getNormalVector3fMap().cast<double>()).cast<float>();
+  }
+  for (auto& plane : turned.segmentation.planes)
+    plane = Plane::fromPointAndNormal(centre + turn * (plane.foot() - centre), turn * plane.normal);
+
+  PlaneProxies by_turn_proxies, of_turned_proxies;
+  const auto by_turn = completeAll(box, by_turn_proxies, turn);
+  const auto of_turned = completeAll(turned, of_turned_proxies);
+  EXPECT_TRUE(by_turn_proxies.normalization.rotation.isApprox(turn));
+  EXPECT_TRUE(of_turned_proxies.normalization.rotation.isIdentity(0.0));
+  // The network reads the same input, so the answers agree once the turned scan's is turned back.
+  ASSERT_EQ(by_turn.size(), of_turned.size());
+  for (std::size_t i = 0; i < by_turn.size(); ++i) {
+    EXPECT_NEAR(by_turn[i].confidence, of_turned[i].confidence, 1e-4);
+    EXPECT_GT(by_turn[i].plane.normal.dot(turn.transpose() * of_turned[i].plane.normal), 1.0 - 1e-5);
+    ASSERT_EQ(by_turn[i].points.size(), of_turned[i].points.size());
+    for (std::size_t j = 0; j < by_turn[i].points.size(); j += 13) {
+      const Eigen::Vector3d want =
+          centre + turn.transpose() * (of_turned[i].points[j].getVector3fMap().cast<double>() - centre);
+      EXPECT_LT((by_turn[i].points[j].getVector3fMap().cast<double>() - want).norm(), 1e-3);
+    }
+  }
+  // A turn that is not a rotation is refused.
+  PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(box.cloud);
+  encoder.setSegmentation(box.segmentation);
+  encoder.setTurn(Eigen::Vector3d(1, 1, -1).asDiagonal());
+  PlaneProxies proxies;
+  EXPECT_THROW(encoder.encode(proxies), InvalidInputError);
+}
+
+TEST_F(PublicApi, CompleteWithTurnsIsTheCompleterWithOneTurnAndAVoteWithMore) {
+  TurnEnsembleOptions options;
+  EXPECT_EQ(options.turns, 4);  // the default, measured in doc/results.md
+  options.turns = 1;
+  options.threshold = 0.0;
+  Normalization frame;
+  frame.scale = -1.0;
+  const auto once = completeWithTurns(model, box.cloud, box.segmentation, options, &frame);
+  PlaneProxies proxies;
+  const auto direct = completeAll(box, proxies);
+  EXPECT_DOUBLE_EQ(frame.scale, proxies.normalization.scale);
+  EXPECT_TRUE(frame.center.isApprox(proxies.normalization.center));
+  ASSERT_EQ(once.size(), direct.size());
+  for (std::size_t i = 0; i < once.size(); ++i) {
+    EXPECT_EQ(once[i].confidence, direct[i].confidence);
+    EXPECT_TRUE(once[i].plane.normal.isApprox(direct[i].plane.normal));
+    EXPECT_EQ(once[i].points.size(), direct[i].points.size());
+  }
+
+  // Four turns, every prediction voting: each merged primitive's confidence is a mean over the
+  // turns, the primitives are sorted, and their points lie on their planes.
+  options.turns = 4;
+  options.candidate_threshold = 0.0;
+  frame = Normalization{};
+  const auto voted = completeWithTurns(model, box.cloud, box.segmentation, options, &frame);
+  EXPECT_DOUBLE_EQ(frame.scale, proxies.normalization.scale);  // the unturned run's frame
+  EXPECT_TRUE(frame.rotation.isIdentity(0.0));
+  ASSERT_FALSE(voted.empty());
+  const double unit = std::sqrt(21.0);  // the box's diagonal in user units
+  for (std::size_t i = 0; i < voted.size(); ++i) {
+    EXPECT_GT(voted[i].confidence, 0.0f);
+    EXPECT_LE(voted[i].confidence, 1.0f);
+    if (i > 0) {
+      EXPECT_LE(voted[i].confidence, voted[i - 1].confidence);
+    }
+    ASSERT_FALSE(voted[i].points.empty());
+    for (const auto& p : voted[i].points)
+      EXPECT_LT(std::abs(voted[i].plane.signedDistance(p.getVector3fMap().cast<double>())), 1e-4 * unit);
+  }
+  options.candidate_threshold = 1.5;
+  EXPECT_THROW(completeWithTurns(model, box.cloud, box.segmentation, options), InvalidInputError);
+  options.candidate_threshold = 0.0;
+  options.turns = 0;
+  EXPECT_THROW(completeWithTurns(model, box.cloud, box.segmentation, options), InvalidInputError);
+}
+
 TEST_F(PublicApi, ThresholdKeepsOnlyConfidentPrimitivesSorted) {
   PlaneProxyEncoder encoder;
   encoder.setModel(model);
@@ -318,13 +422,13 @@ TEST(PacoCompleteTool, WritesPrimitivesAndFailsCleanly) {
   std::string output;
   const std::string common = tool + " " + dir.file("box.xyz") + " --segmenter region-growing --threads 1";
   EXPECT_EQ(test::runCommand(common + " -o " + dir.file("out.vg") + " --pcd " + dir.file("out.pcd") +
-                                 " --threshold 0 --model " + dir.file("tiny.pt"),
+                                 " --threshold 0 --turns 1 --model " + dir.file("tiny.pt"),
                              &output),
             0)
       << output;
   EXPECT_TRUE(std::filesystem::exists(dir.file("out.vg"))) << output;
   EXPECT_TRUE(std::filesystem::exists(dir.file("out.pcd"))) << output;
-  EXPECT_NE(output.find("complete: 6 primitives"), std::string::npos) << output;  // M = 6
+  EXPECT_NE(output.find("complete: 6 primitives"), std::string::npos) << output;  // one run: M = 6
   EXPECT_EQ(output.find("turned by"), std::string::npos) << output;  // an "as-is" model
   // A "seen-planes" model turns a box turned by 20 degrees about z back onto the axes, and says so.
   ModelConfig turning = test::tinyModelConfig();
@@ -344,6 +448,11 @@ TEST(PacoCompleteTool, WritesPrimitivesAndFailsCleanly) {
             0)
       << output;
   EXPECT_NE(output.find("turned by 20.0 deg"), std::string::npos) << output;
+  EXPECT_NE(output.find("voted over 4 turns"), std::string::npos) << output;  // the default
+  // Turns outside 1..24: a usage error (exit 2), no output file.
+  EXPECT_EQ(test::runCommand(common + " -o " + dir.file("t.vg") + " --turns 25 --model " + dir.file("tiny.pt"), &output), 2);
+  EXPECT_NE(output.find("--turns must be 1 to 24"), std::string::npos) << output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("t.vg")));
   // A corrupt model: a clear error, a non-zero exit and no output file.
   test::writeBytes(dir.file("bad.pt"), "garbage");
   EXPECT_NE(test::runCommand(common + " -o " + dir.file("bad.vg") + " --model " + dir.file("bad.pt"), &output), 0);

@@ -58,7 +58,8 @@ TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
   const ev::MethodInput in = boxWithoutTop();
   ev::MethodOptions options = tinyModelOptions(dir);
   options.confidence_threshold = 0.0;  // an untrained selector: keep every prediction
-  options.fuse_observed = false;       // the network's primitives alone: one per kept query
+  options.fuse_observed = false;       // the network's primitives alone: one per kept query...
+  options.ensemble_turns = 1;          // ...of its one run
   for (const char* frame : {"own", "complete"}) {
     options.completion_frame = frame;
     const ev::MethodOutput out = ev::runMethod("paco", in, options);
@@ -69,12 +70,22 @@ TEST(PacoMethod, RunsThePipelineWithAModelFileInBothFrames) {
     EXPECT_TRUE(out.has_planes) << frame;
     EXPECT_EQ(out.planes.size(), static_cast<std::size_t>(paco::test::tinyModelConfig().kept_queries)) << frame;
   }
+  // Four turns (the default) vote: at most every prediction of every turn, at least one.
+  options.completion_frame = "own";
+  options.ensemble_turns = 4;
+  const ev::MethodOutput voted = ev::runMethod("paco", in, options);
+  EXPECT_NE(voted.reason, ev::FailureReason::Threw) << voted.message;
+  EXPECT_GE(voted.planes.size(), 1u);
+  EXPECT_LE(voted.planes.size(), 4u * paco::test::tinyModelConfig().kept_queries);
+  options.ensemble_turns = 0;
+  EXPECT_EQ(ev::runMethod("paco", in, options).reason, ev::FailureReason::Threw);
 }
 
 TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
   paco::test::TempDir dir;
   ev::MethodOptions options = tinyModelOptions(dir);
   options.confidence_threshold = 0.0;
+  options.ensemble_turns = 1;  // one network run: one primitive per kept query
   ASSERT_TRUE(options.fuse_observed);  // the default
   const ev::MethodOutput out = ev::runMethod("paco", boxWithoutTop(), options);
   ASSERT_TRUE(out.has_planes) << out.message;

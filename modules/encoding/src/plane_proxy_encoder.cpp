@@ -47,7 +47,10 @@ void PlaneProxyEncoder::initCompute() {
 }
 
 Normalization PlaneProxyEncoder::ownFrame() const {
-  if (model_->config().input_orientation != "seen-planes") return Normalization::fromBoundingBox(*cloud_);
+  if (model_->config().input_orientation != "seen-planes") {
+    if (turn_.isIdentity(0.0)) return Normalization::fromBoundingBox(*cloud_);
+    return Normalization::fromBoundingBox(*cloud_, turn_);
+  }
   // The segments' planes weighted by their point counts, as paco::completion::collate does
   // in training (there the planes come from the points' normals).
   std::vector<double> sizes(segmentation_.planes.size(), 0.0);
@@ -55,7 +58,7 @@ Normalization PlaneProxyEncoder::ownFrame() const {
     if (label >= 0) sizes[static_cast<std::size_t>(label)] += 1.0;
   std::vector<Eigen::Vector3d> normals;
   for (const auto& plane : segmentation_.planes) normals.push_back(plane.normal);
-  return Normalization::fromBoundingBox(*cloud_, seenPlanesRotation(normals, sizes));
+  return Normalization::fromBoundingBox(*cloud_, turn_ * seenPlanesRotation(normals, sizes));
 }
 
 void PlaneProxyEncoder::computeProxies(PlaneProxies& proxies) {

@@ -13,6 +13,7 @@
 #ifdef PACO_EVALUATION_WITH_COMPLETION
 #include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
+#include <paco/completion/turn_ensemble.h>
 #include <paco/encoding/plane_proxy_encoder.h>
 #endif
 
@@ -219,6 +220,8 @@ CompletionModel::ConstPtr cachedModel(const std::string& path, int threads) {
   return model;
 }
 
+static_assert(kMaxEnsembleTurns == paco::kMaxEnsembleTurns, "evaluation restates the completion module's limit");
+
 MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
   if (options.completion_frame != "own" && options.completion_frame != "complete")
     throw InvalidInputError("completion frame '" + options.completion_frame + "' is not one of: own, complete");
@@ -235,19 +238,26 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     return out;
   }
   const auto start = std::chrono::steady_clock::now();
-  PlaneProxyEncoder encoder;
-  encoder.setModel(model);
-  encoder.setInputCloud(in.input.makeShared());
-  encoder.setSegmentation(segmentation);
-  if (options.completion_frame == "complete") encoder.setFrame(Normalization{});  // already the complete frame
-  PlaneProxies proxies;
-  encoder.encode(proxies);
-  ParametricCompleter completer;
-  completer.setModel(model);
-  completer.setConfidenceThreshold(options.confidence_threshold);
-  completer.setInputProxies(proxies);
   std::vector<PlanarPrimitive> primitives;
-  completer.complete(primitives);
+  if (options.completion_frame == "complete") {  // already the complete frame: no own box, no turns
+    PlaneProxyEncoder encoder;
+    encoder.setModel(model);
+    encoder.setInputCloud(in.input.makeShared());
+    encoder.setSegmentation(segmentation);
+    encoder.setFrame(Normalization{});
+    PlaneProxies proxies;
+    encoder.encode(proxies);
+    ParametricCompleter completer;
+    completer.setModel(model);
+    completer.setConfidenceThreshold(options.confidence_threshold);
+    completer.setInputProxies(proxies);
+    completer.complete(primitives);
+  } else {
+    TurnEnsembleOptions ensemble;
+    ensemble.turns = options.ensemble_turns;
+    ensemble.threshold = options.confidence_threshold;
+    primitives = completeWithTurns(model, in.input.makeShared(), segmentation, ensemble);
+  }
   out.seconds["complete"] = secondsSince(start);
   if (options.fuse_observed) {
     const auto fuse_start = std::chrono::steady_clock::now();

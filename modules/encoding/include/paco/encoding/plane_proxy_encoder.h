@@ -62,6 +62,12 @@ class PlaneProxyEncoder {
   void setFrame(const Normalization& frame) { frame_ = frame; }
   /// Back to the input's own bounding box.
   void resetFrame() { frame_.reset(); }
+  /// Also turns the input by this proper rotation inside the own frame (after the model's own
+  /// turn, if any; the box is taken in the turned axes). Default the identity. Test-time
+  /// ensembling (paco::completeWithTurns) runs the network on several 90-degree turns of one
+  /// scan. Not used when setFrame() gave a frame.
+  void setTurn(const Eigen::Matrix3d& turn) { turn_ = turn; }
+  const Eigen::Matrix3d& getTurn() const { return turn_; }
 
   /// Validates the input (InvalidInputError: no/empty cloud, NaN points, labels size mismatch,
   /// no segment; ModelError: no model) then encodes.
@@ -79,6 +85,7 @@ class PlaneProxyEncoder {
   CompletionModel::ConstPtr model_;
   int num_points_ = 2048;
   std::optional<Normalization> frame_;
+  Eigen::Matrix3d turn_ = Eigen::Matrix3d::Identity();
 };
 
 }  // namespace paco

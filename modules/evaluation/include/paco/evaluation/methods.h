@@ -34,6 +34,10 @@ struct MethodInput {
 constexpr std::size_t kMinInputPointBudget = 256;
 constexpr std::size_t kDefaultInputPointBudget = 20000;
 
+/// The most test-time turns of `paco` (MethodOptions::ensemble_turns; paco::kMaxEnsembleTurns,
+/// restated so that tools built without the completion module can check their options).
+constexpr int kMaxEnsembleTurns = 24;
+
 /// Parameters shared by every method.
 struct MethodOptions {
   /// Assembler backend: "polyfit" (PolyFit + CBC, default) or "cell-complex".
@@ -81,6 +85,9 @@ struct MethodOptions {
   /// paco: keep the completed primitives whose confidence is above this (default 0.7, as
   /// paco::ParametricCompleter and the paper).
   double confidence_threshold = 0.7;
+  /// paco: test-time turns of the input (paco::TurnEnsembleOptions::turns, whose default this is;
+  /// 1: the network once, as before the fifteenth session).
+  int ensemble_turns = 4;
   /// paco: fuse the completed primitives with the observed segments (paco::fuseWithObserved):
   /// seen faces keep their fitted planes and points, the network supplies the unseen ones.
   bool fuse_observed = true;
