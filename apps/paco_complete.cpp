@@ -164,9 +164,7 @@ int run(int argc, char** argv) {
       segmentation.planes[s] = paco::Plane::fit(members);
     }
   } else {
-    segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
-    segmenter->setMinPointsPerParallelPlane(
-        paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points));
+    paco::setScanMinimums(*segmenter, cloud->size(), o.min_points, o.min_parallel_points);
     segmenter->setInputCloud(cloud);
     segmenter->segment(segmentation);
   }

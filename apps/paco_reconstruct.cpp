@@ -153,9 +153,7 @@ int run(int argc, char** argv) {
 
   timer.start("segment");
   paco::PlanarSegmentation segmentation;
-  segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size(), o.min_points));
-  segmenter->setMinPointsPerParallelPlane(
-      paco::scanMinPointsPerParallelPlane(cloud->size(), o.min_parallel_points));
+  paco::setScanMinimums(*segmenter, cloud->size(), o.min_points, o.min_parallel_points);
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();

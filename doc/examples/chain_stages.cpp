@@ -53,6 +53,8 @@ int main(int argc, char** argv) {
       completer.setConfidenceThreshold(0.7);
       completer.setInputProxies(proxies);
       completer.complete(primitives);  // in the input's own frame and units
+      // paco_reconstruct runs stages 2-3 on four turns of the scan and keeps the planes most turns
+      // predict: paco::completeWithTurns(model, cloud, segmentation, {}) (turn_ensemble.h).
       // Seen faces keep their fitted planes and points; the network supplies the unseen ones.
       primitives = paco::fuseWithObserved(std::move(primitives), paco::makePrimitives(*cloud, segmentation));
     } else {

@@ -92,9 +92,7 @@ std::map<std::string, Entry>& registry() {
     auto segmenter = makePlanarSegmenter<pcl::PointNormal>(options.segmenter);
     segmenter->setInputCloud(in.input.makeShared());
     segmenter->setNumberOfThreads(1);
-    segmenter->setMinPointsPerPlane(scanMinPointsPerPlane(in.input.size(), options.segment_min_points));
-    segmenter->setMinPointsPerParallelPlane(
-        scanMinPointsPerParallelPlane(in.input.size(), options.segment_min_parallel_points));
+    setScanMinimums(*segmenter, in.input.size(), options.segment_min_points, options.segment_min_parallel_points);
     segmenter->segment(seg);
 #else
     throw InvalidInputError("this build has no paco::segmentation; use the dataset's labels (--dataset-labels)");

@@ -171,6 +171,16 @@ std::vector<std::string> availablePlanarSegmenters();
 
 /// A built-in backend by name (see availablePlanarSegmenters()). Throws InvalidInputError for an
 /// unknown name, listing the known ones.
+/// The tools' plane minimums for a cloud of `points` points: setMinPointsPerPlane(
+/// scanMinPointsPerPlane(points, min_points)) and setMinPointsPerParallelPlane(
+/// scanMinPointsPerParallelPlane(points, min_parallel_points)). paco_reconstruct, paco_complete,
+/// paco_eval and the data set's input labels all segment this way.
+template <typename PointT>
+void setScanMinimums(PlanarSegmenter<PointT>& segmenter, std::size_t points, int min_points, int min_parallel_points) {
+  segmenter.setMinPointsPerPlane(scanMinPointsPerPlane(points, min_points));
+  segmenter.setMinPointsPerParallelPlane(scanMinPointsPerParallelPlane(points, min_parallel_points));
+}
+
 template <typename PointT>
 typename PlanarSegmenter<PointT>::Ptr makePlanarSegmenter(const std::string& name = "gocopp");
 
