@@ -180,7 +180,8 @@ int dataset(const Options& o) {
   b.method.completion_frame = o.completion_frame;
   b.method.confidence_threshold = o.threshold;
   if (o.turns < 1 || o.turns > ev::kMaxEnsembleTurns)
-    throw paco::app::UsageError("--turns must be 1 to " + std::to_string(ev::kMaxEnsembleTurns));
+    throw paco::app::UsageError("--turns must be 1 to " + std::to_string(ev::kMaxEnsembleTurns) + ", got " +
+                                std::to_string(o.turns));
   b.method.ensemble_turns = o.turns;
   b.method.fuse_observed = o.observed_fusion == "on";
   b.method.align_unseen_degrees = o.fusion.align_unseen_degrees;

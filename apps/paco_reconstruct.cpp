@@ -170,7 +170,8 @@ int run(int argc, char** argv) {
   if (o.no_completion) {
     primitives = paco::makePrimitives(*cloud, segmentation);
   } else {
-    primitives = paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns, paco::TurnEnsembleOptions().num_points, timer);
+    primitives = paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns,
+                                         paco::TurnEnsembleOptions().num_points, timer);
     if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

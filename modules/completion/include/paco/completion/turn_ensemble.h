@@ -27,7 +27,8 @@ constexpr int kMaxEnsembleTurns = 24;
 
 /// The first `count` (1..kMaxEnsembleTurns) of the axis-preserving rotations, in a fixed order:
 /// the identity, the three half turns about the axes (a box keeps its extent along every axis),
-/// then the quarter turns. Throws InvalidInputError outside 1..kMaxEnsembleTurns.
+/// then the other 20 (quarter turns about an axis, turns about a diagonal). Throws
+/// InvalidInputError outside 1..kMaxEnsembleTurns.
 std::vector<Eigen::Matrix3d> ensembleTurns(int count);
 
 struct TurnEnsembleOptions {

@@ -169,8 +169,6 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
 /// paco was built with CGAL, efficient-ransac.
 std::vector<std::string> availablePlanarSegmenters();
 
-/// A built-in backend by name (see availablePlanarSegmenters()). Throws InvalidInputError for an
-/// unknown name, listing the known ones.
 /// The tools' plane minimums for a cloud of `points` points: setMinPointsPerPlane(
 /// scanMinPointsPerPlane(points, min_points)) and setMinPointsPerParallelPlane(
 /// scanMinPointsPerParallelPlane(points, min_parallel_points)). paco_reconstruct, paco_complete,
@@ -181,6 +179,8 @@ void setScanMinimums(PlanarSegmenter<PointT>& segmenter, std::size_t points, int
   segmenter.setMinPointsPerParallelPlane(scanMinPointsPerParallelPlane(points, min_parallel_points));
 }
 
+/// A built-in backend by name (see availablePlanarSegmenters()). Throws InvalidInputError for an
+/// unknown name, listing the known ones.
 template <typename PointT>
 typename PlanarSegmenter<PointT>::Ptr makePlanarSegmenter(const std::string& name = "gocopp");
 
