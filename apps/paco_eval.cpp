@@ -9,6 +9,7 @@
 #include <paco/evaluation/benchmark.h>
 #include <paco/evaluation/metrics.h>
 #include <paco/evaluation/report.h>
+#include <paco/io/cloud_io.h>
 #include <paco/io/mesh_io.h>
 
 #include <boost/algorithm/string.hpp>
@@ -32,7 +33,7 @@ paco::app::FusionFlags fusionFlagsOf(const ev::MethodOptions& method) {
 }
 
 struct Options {
-  std::string pred, gt;
+  std::string pred, gt, input;
   bool same_seed = false;
   bool score_failure = false;
   std::string dataset, split = "val", methods = "direct,oracle,poisson-qem", assemblers = "polyfit,cell-complex";
@@ -58,10 +59,11 @@ struct Options {
 
 void printHelp(const po::options_description& visible) {
   std::cout << "Usage:\n"
-            << "  " << kTool << " --pred MESH --gt MESH            metrics of one mesh\n"
-            << "  " << kTool << " --dataset DIR -o OUT_DIR [options]  evaluate methods on a dataset split\n\n"
+            << "  " << kTool << " --pred MESH --gt MESH [--input SCAN]  metrics of one mesh\n"
+            << "  " << kTool << " --dataset DIR -o OUT_DIR [options]      evaluate methods on a dataset split\n\n"
             << "Single mode prints CD, HD (both x 100, in the GT's normalised frame of unit bounding-box\n"
-            << "diagonal), NC, #f, #v, whether the prediction is a closed solid and its volume / the GT's.\n"
+            << "diagonal), NC, #f, #v, whether the prediction is a closed solid and its volume / the GT's;\n"
+            << "with --input, GT->pred also over the GT surface the scan saw and the surface it did not.\n"
             << "Dataset mode writes OUT_DIR/eval.csv (one row per case; an existing one is resumed: its\n"
             << "cases are skipped) and OUT_DIR/results.md (tables per level and overall). A case fails when\n"
             << "it has no mesh, an empty, open, non-manifold or non-oriented one, runs out of time or\n"
@@ -126,11 +128,19 @@ int single(const Options& o) {
   const paco::SurfaceMesh pred = loadForEvaluation(o.pred, "predicted");
   const paco::SurfaceMesh gt = loadForEvaluation(o.gt, "ground-truth");
   timer.stop();
+  std::vector<Eigen::Vector3d> seen;
+  if (!o.input.empty()) {
+    const paco::io::LabelledCloud input = paco::io::loadCloud(o.input);
+    if (input.points.empty())
+      throw paco::InvalidInputError("input cloud '" + o.input + "' has no points; give the partial scan the mesh was made from");
+    for (const auto& p : input.points) seen.emplace_back(p.x, p.y, p.z);
+  }
+  timer.stop();
   ev::MetricOptions options;
   options.num_samples = o.samples;
   if (o.same_seed) options.reference_seed = options.prediction_seed;
   timer.start("evaluate");
-  const ev::MeshMetrics m = ev::evaluateMesh(pred, gt, options);
+  const ev::MeshMetrics m = o.input.empty() ? ev::evaluateMesh(pred, gt, options) : ev::evaluateMesh(pred, gt, seen, options);
   timer.stop();
   const ev::FailureReason reason = ev::classifyMesh(pred);
   std::printf("CD=%.4f (pred->GT %.4f, GT->pred %.4f) HD=%.4f NC=%.4f #f=%zu #v=%zu closed=%s", m.chamfer,
@@ -138,6 +148,18 @@ int single(const Options& o) {
               m.num_vertices, m.closed ? "yes" : "no");
   if (!std::isnan(m.volume_ratio)) std::printf(" volume_ratio=%.4f", m.volume_ratio);
   std::printf("\n");
+  if (!o.input.empty()) {
+    // A GT surface all seen or all hidden has no value for the empty part.
+    const auto value = [](double v) {
+      char text[32];
+      std::snprintf(text, sizeof(text), "%.4f", v);
+      return std::isnan(v) ? std::string("none") : std::string(text);
+    };
+    std::printf("GT->pred over the seen GT surface %s, over the hidden %s (%.1f %% of the GT surface is farther "
+                "than %.3g from every input point)\n",
+                value(m.chamfer_gt_to_pred_seen).c_str(), value(m.chamfer_gt_to_pred_hidden).c_str(),
+                100.0 * m.hidden_fraction, options.seen_radius);
+  }
   if (reason != ev::FailureReason::None) {
     const ev::MeshMetrics f = ev::evaluateFailure(gt, options, failureBoxFromName(o.failure_box));
     std::printf("note: in a dataset evaluation this mesh counts as failed (%s) and scores as the failure box: "
@@ -212,6 +234,8 @@ int run(int argc, char** argv) {
       ("help,h", "print this help")
       ("pred", po::value(&o.pred), "single mode: predicted mesh (.obj .off .ply .stl)")
       ("gt", po::value(&o.gt), "single mode: ground-truth mesh")
+      ("input", po::value(&o.input),
+       "single mode: the partial scan the prediction was made from, in the GT's frame; GT->pred is then also split into the seen and the hidden GT surface")
       ("score-failure", po::bool_switch(&o.score_failure), "with --gt only: print what a failed case scores (the failure box) and the sampling floor (the GT against itself)")
       ("same-seed", po::bool_switch(&o.same_seed), "single mode: sample both meshes with the same seed (a mesh against itself scores exactly 0)")
       ("dataset", po::value(&o.dataset), "dataset mode: folder written by paco_dataset")
@@ -254,7 +278,7 @@ int run(int argc, char** argv) {
     printHelp(visible);
     return 0;
   }
-  const bool single_mode = !o.pred.empty() || !o.gt.empty();
+  const bool single_mode = !o.pred.empty() || !o.gt.empty() || !o.input.empty();
   if (single_mode && !o.dataset.empty()) throw paco::app::UsageError("give either --pred/--gt or --dataset, not both");
   if (o.score_failure) {
     if (o.gt.empty() || !o.pred.empty() || !o.dataset.empty())

@@ -83,6 +83,15 @@ TEST(Benchmark, WritesOneRowPerCaseScoresFailuresAsTheBoxAndResumes) {
     }
   }
   EXPECT_EQ(parts.size(), 2u);
+  // Every row splits GT->pred by the partial input: more of the GT is hidden at 75 % missing
+  // than at 25 %, and the two parts make up GT->pred.
+  for (const auto& r : records) {
+    EXPECT_GT(r.hidden_fraction, r.level == 0 ? 0.05 : 0.45) << r.key();
+    EXPECT_LT(r.hidden_fraction, r.level == 0 ? 0.55 : 0.95) << r.key();
+    EXPECT_NEAR((1.0 - r.hidden_fraction) * r.chamfer_gt_to_pred_seen + r.hidden_fraction * r.chamfer_gt_to_pred_hidden,
+                r.chamfer_gt_to_pred, 1e-6)
+        << r.key();
+  }
   // Sanity rows of one sample equal evaluateFailure on its GT mesh: identical across levels of a part.
   for (const auto& a : records)
     for (const auto& b : records)

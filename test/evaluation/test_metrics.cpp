@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <vector>
 
 namespace ev = paco::evaluation;
 using paco::test::makeBox;
@@ -127,6 +129,80 @@ TEST(Metrics, VolumeRatioOfASmallerClosedSolid) {
   const ev::MeshMetrics m = ev::evaluateMesh(open, gt);
   EXPECT_FALSE(m.closed);
   EXPECT_TRUE(std::isnan(m.volume_ratio));
+}
+
+namespace {
+
+// A grid of points over the top face z = 1 of the unit cube, `step` apart (edges included).
+std::vector<Eigen::Vector3d> topFaceGrid(double step) {
+  std::vector<Eigen::Vector3d> points;
+  const int n = static_cast<int>(std::round(1.0 / step));
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) points.emplace_back(i * step, j * step, 1.0);
+  return points;
+}
+
+}  // namespace
+
+TEST(Metrics, GtToPredSplitsIntoTheSeenAndTheHiddenSurface) {
+  // GT: the unit cube, seen from above (a 0.005 grid on its top face). Prediction: its top half,
+  // [0,1]^2 x [0.5,1]. The seen radius 0.03 of the normalised frame is r = 0.03 sqrt(3) = 0.052
+  // in the cube's units, so the seen GT surface is the top face plus a band r high on each side
+  // face: hidden area 5 - 4r of 6. On the hidden surface the GT->pred distance is 0.5 on the
+  // bottom face (area 1), 0.5 - z on the side faces below z = 0.5 (area 2, integral 0.5) and 0 on
+  // the side faces above (the prediction's sides): mean 1 / (5 - 4r), x 100 / sqrt(3). The seen
+  // surface lies on the prediction: only the sampling gap, < 1 (x 100). The gap also adds a
+  // little on the hidden surface (about 0.66 on the 37 % of it at distance 0: +0.25).
+  const paco::SurfaceMesh gt = makeBox({0, 0, 0}, {1, 1, 1});
+  const paco::SurfaceMesh top_half = makeBox({0, 0, 0.5}, {1, 1, 1});
+  ev::MetricOptions options;
+  options.num_samples = 50000;
+  const ev::MeshMetrics m = ev::evaluateMesh(top_half, gt, topFaceGrid(0.005), options);
+  const double r = 0.03 * std::sqrt(3.0);
+  EXPECT_NEAR(m.hidden_fraction, (5.0 - 4.0 * r) / 6.0, 0.01);
+  EXPECT_NEAR(m.chamfer_gt_to_pred_hidden, 100.0 / std::sqrt(3.0) / (5.0 - 4.0 * r) + 0.25, 0.4);
+  EXPECT_LT(m.chamfer_gt_to_pred_seen, 1.0);
+  // The two parts make up GT->pred, weighted by their shares.
+  EXPECT_NEAR((1.0 - m.hidden_fraction) * m.chamfer_gt_to_pred_seen + m.hidden_fraction * m.chamfer_gt_to_pred_hidden,
+              m.chamfer_gt_to_pred, 1e-9);
+  // Without seen points the split is not measured, and the rest is the same.
+  const ev::MeshMetrics plain = ev::evaluateMesh(top_half, gt, options);
+  EXPECT_TRUE(std::isnan(plain.hidden_fraction));
+  EXPECT_TRUE(std::isnan(plain.chamfer_gt_to_pred_seen));
+  EXPECT_TRUE(std::isnan(plain.chamfer_gt_to_pred_hidden));
+  EXPECT_EQ(plain.chamfer, m.chamfer);
+  EXPECT_EQ(plain.hausdorff, m.hausdorff);
+}
+
+TEST(Metrics, NoSeenPointsHideEverythingAndAFullScanHidesNothing) {
+  const paco::SurfaceMesh gt = makeBox({0, 0, 0}, {1, 1, 1});
+  const paco::SurfaceMesh top_half = makeBox({0, 0, 0.5}, {1, 1, 1});
+  const ev::MeshMetrics unseen = ev::evaluateMesh(top_half, gt, std::vector<Eigen::Vector3d>());
+  EXPECT_EQ(unseen.hidden_fraction, 1.0);
+  EXPECT_TRUE(std::isnan(unseen.chamfer_gt_to_pred_seen));
+  EXPECT_NEAR(unseen.chamfer_gt_to_pred_hidden, unseen.chamfer_gt_to_pred, 1e-9);
+  // The GT's own dense sample as the scan: every GT point is seen.
+  const paco::SurfaceSample scan = paco::sampleSurface(gt, 20000, 7);
+  const ev::MeshMetrics seen = ev::evaluateMesh(top_half, gt, scan.points);
+  EXPECT_EQ(seen.hidden_fraction, 0.0);
+  EXPECT_TRUE(std::isnan(seen.chamfer_gt_to_pred_hidden));
+  EXPECT_NEAR(seen.chamfer_gt_to_pred_seen, seen.chamfer_gt_to_pred, 1e-9);
+  // A failure box is split the same way: the cube's box is the cube, so it scores as the cube.
+  const ev::MeshMetrics failed = ev::evaluateFailure(gt, topFaceGrid(0.005));
+  const ev::MeshMetrics cube = ev::evaluateMesh(gt, gt, topFaceGrid(0.005));
+  EXPECT_EQ(failed.hidden_fraction, cube.hidden_fraction);
+  EXPECT_NEAR(failed.chamfer_gt_to_pred_hidden, cube.chamfer_gt_to_pred_hidden, 0.2);  // the sampling floor
+  EXPECT_NEAR(failed.hidden_fraction, (5.0 - 4.0 * 0.03 * std::sqrt(3.0)) / 6.0, 0.02);
+}
+
+TEST(Metrics, BadSeenPointsOrRadiusAreErrors) {
+  const paco::SurfaceMesh gt = makeBox({0, 0, 0}, {1, 1, 1});
+  std::vector<Eigen::Vector3d> seen = topFaceGrid(0.1);
+  seen[3].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(ev::evaluateMesh(gt, gt, seen), paco::InvalidInputError);
+  ev::MetricOptions options;
+  options.seen_radius = 0.0;
+  EXPECT_THROW(ev::evaluateMesh(gt, gt, topFaceGrid(0.1), options), paco::InvalidInputError);
 }
 
 TEST(Metrics, EmptyOrInvalidMeshesAreErrors) {

@@ -33,6 +33,33 @@ TEST(PacoEvalTool, SingleModePrintsTheMetrics) {
   EXPECT_NEAR(std::stod(out.substr(hd + 3)), 5.77, 0.6) << out;
 }
 
+TEST(PacoEvalTool, InputSplitsGtToPredIntoSeenAndHidden) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_eval is not built";
+  paco::test::TempDir dir;
+  paco::io::saveMesh(dir.file("gt.obj"), paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
+  paco::io::saveMesh(dir.file("pred.obj"), paco::test::makeBox({0, 0, 0.5}, {1, 1, 1}));
+  // The scan saw the top face only (a 0.05 grid): about 80 % of the GT surface is hidden (see
+  // Metrics.GtToPredSplitsIntoTheSeenAndTheHiddenSurface).
+  std::string scan;
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) scan += std::to_string(0.05 * i) + " " + std::to_string(0.05 * j) + " 1\n";
+  paco::test::writeBytes(dir.file("scan.xyz"), scan);
+  const std::string command = paco::test::toolPath("paco_eval") + " --pred " + quoted(dir.file("pred.obj")) + " --gt " +
+                              quoted(dir.file("gt.obj")) + " --input ";
+  std::string out;
+  ASSERT_EQ(paco::test::runCommand(command + quoted(dir.file("scan.xyz")), &out), 0) << out;
+  const auto hidden = out.find("over the hidden ");
+  ASSERT_NE(hidden, std::string::npos) << out;
+  EXPECT_NEAR(std::stod(out.substr(hidden + 16)), 12.3, 0.5) << out;
+  const auto share = out.find(" (", hidden);
+  ASSERT_NE(share, std::string::npos) << out;
+  EXPECT_NEAR(std::stod(out.substr(share + 2)), 80.0, 2.0) << out;
+  // An unreadable scan is an error naming it.
+  paco::test::writeBytes(dir.file("bad.xyz"), "1 2\n");
+  EXPECT_NE(paco::test::runCommand(command + quoted(dir.file("bad.xyz")), &out), 0);
+  EXPECT_NE(out.find("bad.xyz"), std::string::npos) << out;
+}
+
 TEST(PacoEvalTool, ScoreFailurePrintsTheBoxAndTheFloor) {
   if (!toolBuilt()) GTEST_SKIP() << "paco_eval is not built";
   paco::test::TempDir dir;

@@ -80,6 +80,9 @@ TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
   a.message = "3 boundary edges";
   a.chamfer_pred_to_gt = 2.5;
   a.chamfer_gt_to_pred = 3.5;
+  a.hidden_fraction = 0.75;
+  a.chamfer_gt_to_pred_seen = 0.5;
+  a.chamfer_gt_to_pred_hidden = 4.5;
   const ev::EvaluationRecord b = record("oracle", "p2", 0, ev::FailureReason::None, 1.61, 3.45, 0.957);
   {
     std::ofstream out(path);
@@ -97,6 +100,9 @@ TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
   EXPECT_DOUBLE_EQ(records[0].chamfer, 6.0);
   EXPECT_DOUBLE_EQ(records[0].chamfer_pred_to_gt, 2.5);
   EXPECT_DOUBLE_EQ(records[0].chamfer_gt_to_pred, 3.5);
+  EXPECT_DOUBLE_EQ(records[0].hidden_fraction, 0.75);
+  EXPECT_DOUBLE_EQ(records[0].chamfer_gt_to_pred_seen, 0.5);
+  EXPECT_DOUBLE_EQ(records[0].chamfer_gt_to_pred_hidden, 4.5);
   EXPECT_DOUBLE_EQ(records[0].nc_prim, 0.9);
   EXPECT_EQ(records[0].unmatched_predicted, 2);
   EXPECT_EQ(records[0].message, a.message);
@@ -105,6 +111,7 @@ TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
   EXPECT_DOUBLE_EQ(records[1].volume_ratio, 0.8);
   EXPECT_DOUBLE_EQ(records[1].seconds.at("assemble"), 0.5);
   EXPECT_EQ(records[1].nc_prim, -1.0);
+  EXPECT_TRUE(std::isnan(records[1].hidden_fraction));  // not measured: an empty field
 
   EXPECT_TRUE(ev::readRecords(dir.file("missing.csv")).empty());
   paco::test::writeBytes(dir.file("other.csv"), "a,b,c\n1,2,3\n");
@@ -133,6 +140,24 @@ TEST(Summary, FailureRateClosedOnlyFiguresAndReasons) {
   EXPECT_EQ(s.failures_by_reason.at(ev::FailureReason::NotClosed), 1u);
   EXPECT_EQ(s.failures_by_reason.at(ev::FailureReason::TimeLimit), 1u);
   EXPECT_DOUBLE_EQ(s.mean_seconds.at("assemble"), 0.5);
+  EXPECT_EQ(s.hidden_fraction, -1.0);  // no record measured the split
+}
+
+TEST(Summary, SeenAndHiddenMeansSkipTheCasesWithoutThem) {
+  std::vector<ev::EvaluationRecord> rs = {record("paco", "a", 2, ev::FailureReason::None, 2.0, 4.0, 0.9),
+                                          record("paco", "b", 2, ev::FailureReason::None, 4.0, 8.0, 0.8),
+                                          record("paco", "c", 2, ev::FailureReason::None, 6.0, 9.0, 0.8)};
+  rs[0].hidden_fraction = 0.6;
+  rs[0].chamfer_gt_to_pred_seen = 0.5;
+  rs[0].chamfer_gt_to_pred_hidden = 1.5;
+  rs[1].hidden_fraction = 1.0;  // all hidden: no seen value
+  rs[1].chamfer_gt_to_pred_hidden = 2.5;
+  const ev::Summary s = ev::summarize(rs);  // rs[2] measured nothing
+  EXPECT_DOUBLE_EQ(s.hidden_fraction, 0.8);
+  EXPECT_DOUBLE_EQ(s.chamfer_gt_to_pred_seen, 0.5);
+  EXPECT_DOUBLE_EQ(s.chamfer_gt_to_pred_hidden, 2.0);
+  const std::string md = ev::markdownReport(rs);
+  EXPECT_NE(md.find("| 1.60 / 2.40 | 0.50 / 2.00 (80) | 7.00 |"), std::string::npos) << md;
 }
 
 TEST(Markdown, OneTablePerLevelAndOverall) {
@@ -147,7 +172,7 @@ TEST(Markdown, OneTablePerLevelAndOverall) {
   EXPECT_EQ(md.find("## Moderate"), std::string::npos);
   EXPECT_NE(md.find("## Hard (75 % missing)"), std::string::npos);
   EXPECT_NE(md.find("## Overall"), std::string::npos);
-  EXPECT_NE(md.find("| direct | polyfit | 1 | 100.0 | 6.00 | 2.40 / 3.60 | 24.00 | 0.750 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| direct | polyfit | 1 | 100.0 | 6.00 | 2.40 / 3.60 | – | 24.00 | 0.750 |"), std::string::npos) << md;
   EXPECT_NE(md.find("no-mesh 1"), std::string::npos);
   EXPECT_NE(md.find("t assemble (s)"), std::string::npos);
   // The sanity row comes after the methods.

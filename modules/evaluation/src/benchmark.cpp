@@ -68,6 +68,14 @@ struct Combination {
   std::string method, assembler;
 };
 
+// The partial input's positions: they split GT->pred into the seen and the hidden GT surface.
+std::vector<Eigen::Vector3d> seenPoints(const data::Sample& sample) {
+  std::vector<Eigen::Vector3d> seen;
+  seen.reserve(sample.input.size());
+  for (const auto& p : sample.input) seen.emplace_back(p.x, p.y, p.z);
+  return seen;
+}
+
 EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_mesh, const MeshMetrics& failure_score,
                               const Combination& combination, const BenchmarkOptions& options) {
   MethodInput in;
@@ -100,7 +108,7 @@ EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_
   const auto start = std::chrono::steady_clock::now();
   if (r.reason == FailureReason::None) {
     try {
-      const MeshMetrics m = evaluateMesh(out.mesh, gt_mesh, options.metrics);
+      const MeshMetrics m = evaluateMesh(out.mesh, gt_mesh, seenPoints(sample), options.metrics);
       r.setScores(m);
       r.num_faces = m.num_faces;
       r.num_vertices = m.num_vertices;
@@ -226,7 +234,7 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
         }
         if (!todo.empty()) {
           gt_mesh = dataset.loadGtMesh(sample);
-          failure_score = evaluateFailure(gt_mesh, options.metrics, options.failure_box);
+          failure_score = evaluateFailure(gt_mesh, seenPoints(sample), options.metrics, options.failure_box);
         }
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex);

@@ -33,8 +33,10 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr toCloud(const SurfaceSample& sample) {
 }
 
 // For every point of `from`, its nearest neighbour in `to` (the kd-tree of `to`). Distances are
-// recomputed in double from the original coordinates: the tree only picks the neighbour.
-Directed directed(const SurfaceSample& from, const SurfaceSample& to, const pcl::KdTreeFLANN<pcl::PointXYZ>& tree) {
+// recomputed in double from the original coordinates: the tree only picks the neighbour. Each
+// point's distance goes to `distances` when given.
+Directed directed(const SurfaceSample& from, const SurfaceSample& to, const pcl::KdTreeFLANN<pcl::PointXYZ>& tree,
+                  std::vector<double>* distances = nullptr) {
   Directed result;
   std::vector<int> index(1);
   std::vector<float> squared(1);
@@ -46,6 +48,7 @@ Directed directed(const SurfaceSample& from, const SurfaceSample& to, const pcl:
       throw InvalidInputError("compareSamples: nearest-neighbour search found nothing");
     const auto j = static_cast<std::size_t>(index[0]);
     const double distance = (p - to.points[j]).norm();
+    if (distances) distances->push_back(distance);
     sum_distance += distance;
     result.max_distance = std::max(result.max_distance, distance);
     sum_agreement += std::abs(from.normals[i].dot(to.normals[j]));
@@ -73,16 +76,16 @@ SurfaceMesh boxMesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   return box;
 }
 
-}  // namespace
-
-SurfaceDistances compareSamples(const SurfaceSample& predicted, const SurfaceSample& reference) {
+// compareSamples, and each reference point's distance to the prediction when asked.
+SurfaceDistances compare(const SurfaceSample& predicted, const SurfaceSample& reference,
+                         std::vector<double>* reference_distances) {
   checkSample(predicted, "predicted");
   checkSample(reference, "reference");
   pcl::KdTreeFLANN<pcl::PointXYZ> predicted_tree, reference_tree;
   predicted_tree.setInputCloud(toCloud(predicted));
   reference_tree.setInputCloud(toCloud(reference));
   const Directed forward = directed(predicted, reference, reference_tree);
-  const Directed backward = directed(reference, predicted, predicted_tree);
+  const Directed backward = directed(reference, predicted, predicted_tree, reference_distances);
   SurfaceDistances d;
   d.chamfer_pred_to_gt = forward.mean_distance;
   d.chamfer_gt_to_pred = backward.mean_distance;
@@ -92,7 +95,32 @@ SurfaceDistances compareSamples(const SurfaceSample& predicted, const SurfaceSam
   return d;
 }
 
-MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& reference, const MetricOptions& options) {
+// Which reference samples lie within `radius` of a seen point: a kd-tree of the seen points,
+// one nearest-neighbour query per sample.
+std::vector<bool> seenSamples(const SurfaceSample& reference, const std::vector<Eigen::Vector3d>& seen, double radius) {
+  std::vector<bool> is_seen(reference.points.size(), false);
+  if (seen.empty()) return is_seen;
+  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  cloud->resize(seen.size());
+  for (std::size_t i = 0; i < seen.size(); ++i)
+    (*cloud)[i] = pcl::PointXYZ(static_cast<float>(seen[i].x()), static_cast<float>(seen[i].y()),
+                                static_cast<float>(seen[i].z()));
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(cloud);
+  std::vector<int> index(1);
+  std::vector<float> squared(1);
+  for (std::size_t i = 0; i < reference.points.size(); ++i) {
+    const Eigen::Vector3d& p = reference.points[i];
+    const pcl::PointXYZ query(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+    if (tree.nearestKSearch(query, 1, index, squared) < 1) continue;
+    is_seen[i] = (p - seen[static_cast<std::size_t>(index[0])]).norm() <= radius;
+  }
+  return is_seen;
+}
+
+// evaluateMesh with or without the seen points (`seen` may be null).
+MeshMetrics measure(const SurfaceMesh& predicted, const SurfaceMesh& reference, const std::vector<Eigen::Vector3d>* seen,
+                    const MetricOptions& options) {
   if (options.num_samples == 0) throw InvalidInputError("evaluateMesh: num_samples must be at least 1");
   if (!(options.distance_scale > 0.0)) throw InvalidInputError("evaluateMesh: distance_scale must be > 0");
   predicted.validate("predicted mesh");
@@ -100,17 +128,27 @@ MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& refere
   if (predicted.empty()) throw InvalidInputError("evaluateMesh: the predicted mesh has no faces");
   if (reference.empty()) throw InvalidInputError("evaluateMesh: the reference mesh has no faces");
 
+  if (seen) {
+    if (!(options.seen_radius > 0.0)) throw InvalidInputError("evaluateMesh: seen_radius must be > 0");
+    for (std::size_t i = 0; i < seen->size(); ++i)
+      if (!(*seen)[i].allFinite())
+        throw InvalidInputError("evaluateMesh: seen point " + std::to_string(i) + " is not finite");
+  }
+
   SurfaceMesh pred = predicted, ref = reference;
+  std::vector<Eigen::Vector3d> seen_points = seen ? *seen : std::vector<Eigen::Vector3d>();
   if (options.normalize_by_reference) {
     Eigen::Vector3d lo, hi;
     boundingBox(reference, lo, hi);
     const Normalization frame = Normalization::fromBoundingBox(lo, hi);
     frame.apply(pred);
     frame.apply(ref);
+    for (auto& p : seen_points) p = frame.apply(p);
   }
   const SurfaceSample pred_sample = sampleSurface(pred, options.num_samples, options.prediction_seed);
   const SurfaceSample ref_sample = sampleSurface(ref, options.num_samples, options.reference_seed);
-  const SurfaceDistances d = compareSamples(pred_sample, ref_sample);
+  std::vector<double> ref_distances;
+  const SurfaceDistances d = compare(pred_sample, ref_sample, seen ? &ref_distances : nullptr);
 
   MeshMetrics m;
   m.chamfer = d.chamfer * options.distance_scale;
@@ -124,7 +162,39 @@ MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& refere
   m.volume_ratio = std::numeric_limits<double>::quiet_NaN();
   const double ref_volume = signedVolume(reference);
   if (m.closed && ref_volume != 0.0) m.volume_ratio = signedVolume(predicted) / ref_volume;
+  if (seen) {
+    const std::vector<bool> is_seen = seenSamples(ref_sample, seen_points, options.seen_radius);
+    double sum_seen = 0.0, sum_hidden = 0.0;
+    std::size_t num_seen = 0;
+    for (std::size_t i = 0; i < is_seen.size(); ++i) {
+      if (is_seen[i]) {
+        sum_seen += ref_distances[i];
+        ++num_seen;
+      } else {
+        sum_hidden += ref_distances[i];
+      }
+    }
+    const std::size_t num_hidden = is_seen.size() - num_seen;
+    m.hidden_fraction = static_cast<double>(num_hidden) / static_cast<double>(is_seen.size());
+    if (num_seen) m.chamfer_gt_to_pred_seen = sum_seen / static_cast<double>(num_seen) * options.distance_scale;
+    if (num_hidden) m.chamfer_gt_to_pred_hidden = sum_hidden / static_cast<double>(num_hidden) * options.distance_scale;
+  }
   return m;
+}
+
+}  // namespace
+
+SurfaceDistances compareSamples(const SurfaceSample& predicted, const SurfaceSample& reference) {
+  return compare(predicted, reference, nullptr);
+}
+
+MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& reference, const MetricOptions& options) {
+  return measure(predicted, reference, nullptr, options);
+}
+
+MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& reference,
+                         const std::vector<Eigen::Vector3d>& seen_points, const MetricOptions& options) {
+  return measure(predicted, reference, &seen_points, options);
 }
 
 SurfaceMesh failureBox(const SurfaceMesh& reference, FailureBox box) {
@@ -141,13 +211,26 @@ SurfaceMesh failureBox(const SurfaceMesh& reference, FailureBox box) {
   return result;
 }
 
-MeshMetrics evaluateFailure(const SurfaceMesh& reference, const MetricOptions& options, FailureBox box) {
-  MeshMetrics m = evaluateMesh(failureBox(reference, box), reference, options);
+namespace {
+
+// A failure box's metrics: nothing was produced.
+MeshMetrics asFailure(MeshMetrics m) {
   m.num_faces = 0;
   m.num_vertices = 0;
   m.closed = false;
   m.volume_ratio = std::numeric_limits<double>::quiet_NaN();
   return m;
+}
+
+}  // namespace
+
+MeshMetrics evaluateFailure(const SurfaceMesh& reference, const MetricOptions& options, FailureBox box) {
+  return asFailure(evaluateMesh(failureBox(reference, box), reference, options));
+}
+
+MeshMetrics evaluateFailure(const SurfaceMesh& reference, const std::vector<Eigen::Vector3d>& seen_points,
+                            const MetricOptions& options, FailureBox box) {
+  return asFailure(evaluateMesh(failureBox(reference, box), reference, seen_points, options));
 }
 
 PrimitiveAgreement comparePrimitives(const std::vector<Plane>& predicted, const std::vector<Plane>& reference) {

@@ -75,7 +75,8 @@ double parseNumber(const std::string& text) {
 
 const char* kFixedColumns[] = {"method", "assembler", "part", "level", "view", "status", "reason",
                                "cd", "hd", "nc", "nc_prim", "unmatched_pred", "faces", "vertices",
-                               "closed", "volume_ratio", "cd_pred_to_gt", "cd_gt_to_pred"};
+                               "closed", "volume_ratio", "cd_pred_to_gt", "cd_gt_to_pred",
+                               "hidden_fraction", "cd_gt_to_pred_seen", "cd_gt_to_pred_hidden"};
 constexpr std::size_t kNumFixed = sizeof(kFixedColumns) / sizeof(kFixedColumns[0]);
 
 double mean(const std::vector<double>& v) {
@@ -142,6 +143,13 @@ Rows groupRows(const std::vector<EvaluationRecord>& records, bool with_sanity, c
   return rows;
 }
 
+// "seen / hidden (hidden %)", or "–" when no case measured the split.
+std::string seenHidden(const Summary& s) {
+  if (s.hidden_fraction < 0.0) return "–";
+  return cell(s.chamfer_gt_to_pred_seen, 2) + " / " + cell(s.chamfer_gt_to_pred_hidden, 2) + " (" +
+         cell(100.0 * s.hidden_fraction, 0) + ")";
+}
+
 std::string table(const std::vector<EvaluationRecord>& records) {
   // Rows in order of first appearance of (method, assembler); sanity last. "total" has its own column.
   Rows rows = groupRows(records, /*with_sanity=*/true, "total");
@@ -151,10 +159,10 @@ std::string table(const std::vector<EvaluationRecord>& records) {
   std::stable_partition(order.begin(), order.end(), [](const auto& k) { return k.first != "sanity"; });
 
   std::ostringstream md;
-  md << "| Method | Assembler | N | FR % | CD | CD pred→GT / GT→pred | HD | NC | NC_prim | unmatched pred | CD closed | HD closed | "
+  md << "| Method | Assembler | N | FR % | CD | CD pred→GT / GT→pred | GT→pred seen / hidden (hidden %) | HD | NC | NC_prim | unmatched pred | CD closed | HD closed | "
         "vol. ratio (median) | #f | #v | failures by reason |";
   for (const auto& s : stages) md << " t " << s << " (s) |";
-  md << " t total (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+  md << " t total (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
   for (std::size_t i = 0; i < stages.size(); ++i) md << "---|";
   md << "---|\n";
   for (const auto& k : order) {
@@ -167,7 +175,7 @@ std::string table(const std::vector<EvaluationRecord>& records) {
     if (reasons.empty()) reasons = "–";
     md << "| " << k.first << " | " << k.second << " | " << s.count << " | " << cell(s.failureRate(), 1) << " | "
        << cell(s.chamfer, 2) << " | " << cell(s.chamfer_pred_to_gt, 2) << " / " << cell(s.chamfer_gt_to_pred, 2)
-       << " | " << cell(s.hausdorff, 2) << " | " << cell(s.normal_consistency, 3) << " | "
+       << " | " << seenHidden(s) << " | " << cell(s.hausdorff, 2) << " | " << cell(s.normal_consistency, 3) << " | "
        << cell(s.nc_prim, 3) << " | " << cell(s.unmatched_predicted, 1) << " | " << cell(s.closed_chamfer, 2) << " | "
        << cell(s.closed_hausdorff, 2) << " | " << cell(s.volume_ratio_median, 3) << " | "
        << (s.failures < s.count ? cell(s.faces, 1) : "–") << " | "
@@ -246,6 +254,9 @@ void EvaluationRecord::setScores(const MeshMetrics& metrics) {
   chamfer = metrics.chamfer;
   chamfer_pred_to_gt = metrics.chamfer_pred_to_gt;
   chamfer_gt_to_pred = metrics.chamfer_gt_to_pred;
+  hidden_fraction = metrics.hidden_fraction;
+  chamfer_gt_to_pred_seen = metrics.chamfer_gt_to_pred_seen;
+  chamfer_gt_to_pred_hidden = metrics.chamfer_gt_to_pred_hidden;
   hausdorff = metrics.hausdorff;
   normal_consistency = metrics.normal_consistency;
 }
@@ -270,7 +281,9 @@ void appendRecord(std::ostream& out, const EvaluationRecord& r) {
       << (r.nc_prim < 0 ? std::string() : formatNumber(r.nc_prim, 9)) << ','
       << (r.unmatched_predicted < 0 ? std::string() : std::to_string(r.unmatched_predicted)) << ',' << r.num_faces
       << ',' << r.num_vertices << ',' << (r.failed() ? 0 : 1) << ',' << formatNumber(r.volume_ratio, 9) << ','
-      << formatNumber(r.chamfer_pred_to_gt, 9) << ',' << formatNumber(r.chamfer_gt_to_pred, 9);
+      << formatNumber(r.chamfer_pred_to_gt, 9) << ',' << formatNumber(r.chamfer_gt_to_pred, 9) << ','
+      << formatNumber(r.hidden_fraction, 9) << ',' << formatNumber(r.chamfer_gt_to_pred_seen, 9) << ','
+      << formatNumber(r.chamfer_gt_to_pred_hidden, 9);
   for (const auto& s : stageNames()) {
     auto it = r.seconds.find(s);
     out << ',' << (it == r.seconds.end() ? std::string() : formatNumber(it->second, 6));
@@ -324,6 +337,9 @@ std::vector<EvaluationRecord> readRecords(const std::string& path, std::size_t* 
       r.volume_ratio = parseNumber(f[15]);
       r.chamfer_pred_to_gt = parseNumber(f[16]);
       r.chamfer_gt_to_pred = parseNumber(f[17]);
+      r.hidden_fraction = parseNumber(f[18]);
+      r.chamfer_gt_to_pred_seen = parseNumber(f[19]);
+      r.chamfer_gt_to_pred_hidden = parseNumber(f[20]);
       for (std::size_t i = 0; i < stageNames().size(); ++i)
         if (!f[kNumFixed + i].empty()) r.seconds[stageNames()[i]] = parseNumber(f[kNumFixed + i]);
       r.message = f.back();
@@ -339,11 +355,15 @@ Summary summarize(const std::vector<EvaluationRecord>& records) {
   Summary s;
   s.count = records.size();
   std::vector<double> cd, cd_pred_to_gt, cd_gt_to_pred, hd, nc, prim, unmatched, ccd, chd, faces, vertices, volume;
+  std::vector<double> hidden, gt_to_pred_seen, gt_to_pred_hidden;
   std::map<std::string, std::vector<double>> times;
   for (const auto& r : records) {
     cd.push_back(r.chamfer);
     cd_pred_to_gt.push_back(r.chamfer_pred_to_gt);
     cd_gt_to_pred.push_back(r.chamfer_gt_to_pred);
+    if (!std::isnan(r.hidden_fraction)) hidden.push_back(r.hidden_fraction);
+    if (!std::isnan(r.chamfer_gt_to_pred_seen)) gt_to_pred_seen.push_back(r.chamfer_gt_to_pred_seen);
+    if (!std::isnan(r.chamfer_gt_to_pred_hidden)) gt_to_pred_hidden.push_back(r.chamfer_gt_to_pred_hidden);
     hd.push_back(r.hausdorff);
     nc.push_back(r.normal_consistency);
     if (r.nc_prim >= 0) prim.push_back(r.nc_prim);
@@ -364,6 +384,9 @@ Summary summarize(const std::vector<EvaluationRecord>& records) {
   s.chamfer = orMinus(mean(cd));
   s.chamfer_pred_to_gt = orMinus(mean(cd_pred_to_gt));
   s.chamfer_gt_to_pred = orMinus(mean(cd_gt_to_pred));
+  s.hidden_fraction = orMinus(mean(hidden));
+  s.chamfer_gt_to_pred_seen = orMinus(mean(gt_to_pred_seen));
+  s.chamfer_gt_to_pred_hidden = orMinus(mean(gt_to_pred_hidden));
   s.hausdorff = orMinus(mean(hd));
   s.normal_consistency = orMinus(mean(nc));
   s.nc_prim = orMinus(mean(prim));

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,12 @@ struct MetricOptions {
   bool normalize_by_reference = true;
   /// Factor applied to CD and HD (default 100: the paper's tables show CD and HD x 100).
   double distance_scale = 100.0;
+  /// With seen points (the evaluateMesh overload that takes them): GT surface within this
+  /// distance of a seen point counts as seen, the rest as hidden. In the frame CD is measured in
+  /// (the GT's normalised frame unless normalize_by_reference is false). Default 0.03: about
+  /// twice the spacing of a 2,048-point scan of a part of unit diagonal, so the gaps between
+  /// scan points count as seen. > 0.
+  double seen_radius = 0.03;
 };
 
 /// CD, HD and NC between two sampled surfaces, in the units of the samples (no scaling).
@@ -57,12 +64,28 @@ struct MeshMetrics {
   bool closed = false;              ///< the prediction is closed, manifold and consistently oriented
   /// Volume of the prediction / volume of the GT; NaN unless the prediction is a closed solid.
   double volume_ratio = 0.0;
+  /// Measured only when the seen points (the partial input) are given, NaN otherwise. The share
+  /// of the GT surface that is hidden (farther than MetricOptions::seen_radius from every seen
+  /// point), and GT->pred (x distance_scale) over the seen and over the hidden GT surface:
+  /// chamfer_gt_to_pred = (1 - hidden_fraction) * ..._seen + hidden_fraction * ..._hidden. The
+  /// hidden half is what completion has to recover; a part of the GT that is all seen or all
+  /// hidden has NaN for the empty half.
+  double hidden_fraction = std::numeric_limits<double>::quiet_NaN();
+  double chamfer_gt_to_pred_seen = std::numeric_limits<double>::quiet_NaN();
+  double chamfer_gt_to_pred_hidden = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// CD, HD, NC, #f, #v, closedness and volume ratio of `predicted` against `reference` (the GT).
 /// Throws InvalidInputError when either mesh is invalid or has no area.
 MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& reference,
                          const MetricOptions& options = {});
+
+/// The same, and GT->pred split into the GT surface the scan saw and the surface it did not:
+/// `seen_points` are the partial input's points, in the reference's frame (as given, before any
+/// normalisation). No seen points means every GT sample is hidden. Throws InvalidInputError for
+/// a non-finite seen point or seen_radius <= 0.
+MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& reference,
+                         const std::vector<Eigen::Vector3d>& seen_points, const MetricOptions& options = {});
 
 /// Which box a failed reconstruction is scored as.
 enum class FailureBox {
@@ -82,6 +105,9 @@ SurfaceMesh failureBox(const SurfaceMesh& reference, FailureBox box = FailureBox
 /// #f = #v = 0 and closed = false (nothing was produced).
 MeshMetrics evaluateFailure(const SurfaceMesh& reference, const MetricOptions& options = {},
                             FailureBox box = FailureBox::ReferenceBoundingBox);
+/// The same with GT->pred split by `seen_points`, as the evaluateMesh overload that takes them.
+MeshMetrics evaluateFailure(const SurfaceMesh& reference, const std::vector<Eigen::Vector3d>& seen_points,
+                            const MetricOptions& options = {}, FailureBox box = FailureBox::ReferenceBoundingBox);
 
 /// Agreement of predicted planes with the GT planes (supplementary Sec. "Evaluation on Primitive
 /// Parameters"): a minimum-cost one-to-one matching (Hungarian) on 1 - |cos| of the normals.

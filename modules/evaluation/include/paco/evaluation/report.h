@@ -56,12 +56,17 @@ struct EvaluationRecord {
   std::size_t num_faces = 0;   ///< #f (0 when failed)
   std::size_t num_vertices = 0;///< #v (0 when failed)
   double volume_ratio = std::numeric_limits<double>::quiet_NaN();  ///< predicted / GT volume; NaN when not closed
+  /// GT->pred split by the partial input (MeshMetrics): the hidden share of the GT surface, and
+  /// GT->pred x 100 over its seen and its hidden part. NaN when not measured or empty.
+  double hidden_fraction = std::numeric_limits<double>::quiet_NaN();
+  double chamfer_gt_to_pred_seen = std::numeric_limits<double>::quiet_NaN();
+  double chamfer_gt_to_pred_hidden = std::numeric_limits<double>::quiet_NaN();
   /// Wall time per stage in seconds, e.g. {"segment", 0.12}, {"assemble", 0.8}; "total" is added.
   std::map<std::string, double> seconds;
   std::string message;         ///< why it failed, or empty
 
   bool failed() const { return reason != FailureReason::None; }
-  /// Takes CD (and its halves), HD and NC from `metrics`.
+  /// Takes CD (and its halves, and GT->pred's seen and hidden parts), HD and NC from `metrics`.
   void setScores(const MeshMetrics& metrics);
   /// The resume key: method|assembler|part|level|view.
   std::string key() const;
@@ -85,6 +90,9 @@ struct Summary {
   std::map<FailureReason, std::size_t> failures_by_reason;
   double chamfer = 0.0, hausdorff = 0.0, normal_consistency = 0.0;  ///< means over all cases
   double chamfer_pred_to_gt = 0.0, chamfer_gt_to_pred = 0.0;         ///< means over all cases
+  /// Means over the cases that measured them (< 0: none): the hidden share of the GT surface and
+  /// GT->pred over the seen and the hidden GT surface.
+  double hidden_fraction = -1.0, chamfer_gt_to_pred_seen = -1.0, chamfer_gt_to_pred_hidden = -1.0;
   double nc_prim = -1.0;             ///< mean over the cases where it applies; < 0: none
   double unmatched_predicted = -1.0; ///< mean; < 0: not applicable
   double closed_chamfer = -1.0, closed_hausdorff = -1.0;  ///< means over the succeeded cases; < 0: none
