@@ -10,7 +10,10 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
+#include <exception>
+#include <string>
 #include <vector>
 
 namespace paco::app {
@@ -64,9 +67,51 @@ inline void checkTurns(int turns) {
     throw UsageError("--turns must be 1 to " + std::to_string(kMaxEnsembleTurns) + ", got " + std::to_string(turns));
 }
 
-/// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`.
+/// The --known-extent option of the tools that fuse (ObservedFusionOptions::known_extent_points).
+inline void addKnownExtentOption(boost::program_options::options_description& options, std::string& text) {
+  options.add_options()("known-extent", boost::program_options::value(&text),
+                        "X0,Y0,Z0,X1,Y1,Z1: the box the object is known to fill, in the input's units and frame; "
+                        "the hidden side is closed at this box instead of the scan's (with fusion)");
+}
+
+/// The corners of the box "X0,Y0,Z0,X1,Y1,Z1" (--known-extent); none for empty text. Throws
+/// UsageError unless it is six finite numbers with X0 <= X1, Y0 <= Y1 and Z0 <= Z1.
+inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
+  if (text.empty()) return {};
+  std::vector<double> values;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    std::size_t used = 0;
+    double value = std::nan("");
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(value))
+      throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers); '" + item + "' in '" + text +
+                       "' is not a finite number");
+    values.push_back(value);
+    start = comma + 1;
+  }
+  if (values.size() != 6)
+    throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers), got " + std::to_string(values.size()));
+  const Eigen::Vector3d lo(values[0], values[1], values[2]), hi(values[3], values[4], values[5]);
+  if ((lo.array() > hi.array()).any())
+    throw UsageError("--known-extent: X0,Y0,Z0 must not exceed X1,Y1,Z1 (got '" + text + "')");
+  std::vector<Eigen::Vector3d> corners;
+  for (int i = 0; i < 8; ++i)
+    corners.emplace_back((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
+  return corners;
+}
+
+/// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`; the box
+/// fill reaches `known_extent` (parseKnownExtent) when given.
 inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
-                              const PlanarSegmentation& segmentation, const FusionFlags& flags, StageTimer& timer) {
+                              const PlanarSegmentation& segmentation, const FusionFlags& flags,
+                              const std::vector<Eigen::Vector3d>& known_extent, StageTimer& timer) {
   timer.start("fuse");
   ObservedFusionReport report;
   ObservedFusionOptions options;
@@ -74,9 +119,11 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
   options.clip_margin = flags.clipMargin();
   options.fill_spacing = flags.fill_box_spacing;
   options.unseen_point_fraction = flags.unseen_point_fraction;
+  options.known_extent_points = known_extent;
   primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), options, &report);
   timer.stop();
-  std::printf("fuse with the seen faces: %s\n", describe(report).c_str());
+  std::printf("fuse with the seen faces%s: %s\n", known_extent.empty() ? "" : " (box fill to the known extent)",
+              describe(report).c_str());
 }
 
 }  // namespace paco::app

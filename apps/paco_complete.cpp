@@ -40,6 +40,7 @@ struct Options {
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   int turns = paco::TurnEnsembleOptions().turns;
   bool no_fusion = false;
+  std::string known_extent;
   paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   int threads = 0;
   int points = 2048;
@@ -83,6 +84,7 @@ int run(int argc, char** argv) {
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   paco::app::addTurnsOption(visible, o.turns);
+  paco::app::addKnownExtentOption(visible, o.known_extent);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -103,6 +105,9 @@ int run(int argc, char** argv) {
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
   paco::app::checkTurns(o.turns);
+  const std::vector<Eigen::Vector3d> known_extent = paco::app::parseKnownExtent(o.known_extent);
+  if (!known_extent.empty() && o.no_fusion)
+    throw paco::app::UsageError("--known-extent works through the box fill of the fusion step: drop --no-fusion");
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
@@ -179,7 +184,7 @@ int run(int argc, char** argv) {
 
   std::vector<paco::PlanarPrimitive> primitives =
       paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns, o.points, timer);
-  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, timer);
+  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, known_extent, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
                  kTool);

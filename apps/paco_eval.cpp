@@ -55,6 +55,7 @@ struct Options {
   int turns = ev::MethodOptions().ensemble_turns;
   int threads = 1;
   bool no_normals = false;
+  bool known_extent_oracle = false;
 };
 
 void printHelp(const po::options_description& visible) {
@@ -206,12 +207,15 @@ int dataset(const Options& o) {
                                 std::to_string(o.turns));
   b.method.ensemble_turns = o.turns;
   b.method.fuse_observed = o.observed_fusion == "on";
+  if (o.known_extent_oracle && !b.method.fuse_observed)
+    throw paco::app::UsageError("--known-extent-oracle works through the box fill of observed fusion: drop --observed-fusion off");
   b.method.align_unseen_degrees = o.fusion.align_unseen_degrees;
   b.method.clip_margin = o.fusion.clipMargin();
   b.method.fill_box_spacing = o.fusion.fill_box_spacing;
   b.method.unseen_point_fraction = o.fusion.unseen_point_fraction;
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
+  b.method.known_extent_oracle = o.known_extent_oracle;
   b.metrics.num_samples = o.samples;
   b.failure_box = failureBoxFromName(o.failure_box);
   paco::InterruptGuard guard;
@@ -269,6 +273,8 @@ int run(int argc, char** argv) {
       ("observed-fusion", po::value(&o.observed_fusion)->default_value(o.observed_fusion),
        "paco: on (seen faces keep their fitted planes and points, the network adds the unseen) or off (the network's primitives alone, as the paper)")
       ("no-normals", po::bool_switch(&o.no_normals), "give the methods the input points without normals (they are estimated)")
+      ("known-extent-oracle", po::bool_switch(&o.known_extent_oracle),
+       "paco, with fusion: the box fill knows the part's extent from the GT (an oracle: what completion scores when the extent is known)")
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");

@@ -42,6 +42,7 @@ struct Options {
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   int turns = paco::TurnEnsembleOptions().turns;
   bool no_fusion = false;
+  std::string known_extent;
   paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   std::string assembler = "polyfit";
   std::string solver = "cbc";
@@ -97,6 +98,7 @@ int run(int argc, char** argv) {
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   paco::app::addTurnsOption(visible, o.turns);
+  paco::app::addKnownExtentOption(visible, o.known_extent);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -111,6 +113,11 @@ int run(int argc, char** argv) {
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
   paco::app::checkTurns(o.turns);
+  const std::vector<Eigen::Vector3d> known_extent = paco::app::parseKnownExtent(o.known_extent);
+  if (!known_extent.empty() && o.no_fusion)
+    throw paco::app::UsageError("--known-extent works through the box fill of the fusion step: drop --no-fusion");
+  if (!known_extent.empty() && o.no_completion)
+    throw paco::app::UsageError("--known-extent closes the completed scan: drop --no-completion");
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
@@ -172,7 +179,7 @@ int run(int argc, char** argv) {
   } else {
     primitives = paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns,
                                          paco::TurnEnsembleOptions().num_points, timer);
-    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, timer);
+    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, known_extent, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 

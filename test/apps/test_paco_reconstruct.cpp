@@ -1,6 +1,7 @@
 // paco_reconstruct end to end on the shipped sample scan: a closed mesh in the input's own frame
 // plus the primitives as .vg and PCD; bad input and a missing model give a clear error, a
 // non-zero exit, and no output file at all.
+#include "shapes.h"
 #include "test_support.h"
 
 #ifdef PACO_TEST_WITH_COMPLETION
@@ -168,6 +169,57 @@ TEST(PacoReconstruct, FusionKeepsTheSeenFacesWhenTheNetworkKeepsNothing) {
   EXPECT_NE(paco::test::runCommand(base + quoted((out_dir / "part.obj").string()) + " --no-fusion", &log), 0);
   EXPECT_NE(log.find("assembly"), std::string::npos) << log;
   EXPECT_EQ(filesIn(out_dir), 0u);
+}
+
+// A scan of the box [0,2] x [0,1] x [0,1] that stopped at x = 1 ends there; told that the object
+// reaches x = 2, the box fill closes the hidden side there, and the mesh reaches it.
+TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  const paco::SurfaceSample surface = paco::sampleSurface(paco::test::makeBox({0, 0, 0}, {2, 1, 1}), 8000, 3);
+  paco::io::LabelledCloud scan;
+  scan.has_normals = true;
+  for (std::size_t i = 0; i < surface.points.size(); ++i) {
+    const Eigen::Vector3d& q = surface.points[i];
+    if (q.x() > 1.0) continue;
+    pcl::PointNormal p;
+    p.x = float(q.x()), p.y = float(q.y()), p.z = float(q.z());
+    p.normal_x = float(surface.normals[i].x()), p.normal_y = float(surface.normals[i].y());
+    p.normal_z = float(surface.normals[i].z());
+    scan.points.push_back(p);
+  }
+  paco::io::saveCloud(dir.file("half_box.pcd"), scan);
+  const std::string base = tool() + " " + quoted(dir.file("half_box.pcd")) + " --model " + quoted(dir.file("tiny.pt")) +
+                           " --threshold 1 --assembler cell-complex -o ";
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("known.obj")) + " --known-extent 0,0,0,2,1,1", &log), 0)
+      << log;
+  EXPECT_NE(log.find("box fill to the known extent"), std::string::npos) << log;
+  const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("known.obj"));
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  Eigen::Vector3d lo, hi;
+  paco::boundingBox(mesh, lo, hi);
+  EXPECT_NEAR(hi.x(), 2.0, 0.01) << log;
+  EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 0.05) << log;
+  // Without it the mesh ends with the scan.
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("seen.obj")), &log), 0) << log;
+  paco::boundingBox(paco::io::loadMesh(dir.file("seen.obj")), lo, hi);
+  EXPECT_NEAR(hi.x(), 1.0, 0.01) << log;
+
+  // Anything but six finite numbers with X0 <= X1 is a usage error, and so is a known extent
+  // without the fusion that uses it.
+  const std::string bad = tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("bad.obj")) + " --known-extent ";
+  EXPECT_EQ(paco::test::runCommand(bad + "1,2,3", &log), 2) << log;
+  EXPECT_NE(log.find("six numbers), got 3"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,x", &log), 2) << log;
+  EXPECT_NE(log.find("'x' in '0,0,0,1,1,x' is not a finite number"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(bad + "2,0,0,1,1,1", &log), 2) << log;
+  EXPECT_NE(log.find("must not exceed"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,1 --no-fusion", &log), 2) << log;
+  EXPECT_NE(log.find("drop --no-fusion"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,1 --no-completion", &log), 2) << log;
+  EXPECT_FALSE(fs::exists(dir.file("bad.obj")));
 }
 
 // With a tiny candidate-face budget PolyFit must leave out the predicted primitives (the untrained

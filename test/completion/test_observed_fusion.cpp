@@ -277,6 +277,48 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   }
 }
 
+TEST(ObservedFusion, AKnownExtentMovesTheFilledFacesOutToIt) {
+  // The scene of the test above. The object is known to reach x = 1.5 and y = 1.2: the filled
+  // faces x = 0.95 and y = 0.95 move out to x = 1.5 and y = 1.2; y = 0.05 stays. The predicted
+  // top no longer covers the grown box's top face (it stops at x, y = 1), so the rest of that
+  // face is filled too and joins it.
+  const std::vector<PlanarPrimitive> observed = seenBottomAndSide();
+  const std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0.9375}, {0, 0, 1}), {0.5, 0.5, 0.9375}, 1.0, 10, 0.9f)};
+  ObservedFusionOptions options;
+  options.unseen_point_fraction = 1.0;
+  options.fill_spacing = 0.05;
+  options.fill_empty_radius = 0.05;
+  options.known_extent_points = {{1.5, 0.5, 0.5}, {0.5, 1.2, 0.5}};
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  EXPECT_EQ(report.filled_faces, 3u);
+  ASSERT_EQ(fused.size(), 6u);
+  EXPECT_GT(fused[0].points.size(), 100u);  // the top's uncovered part joined the predicted top
+  const Eigen::Vector3d expected_normals[] = {{1, 0, 0}, {0, -1, 0}, {0, 1, 0}};
+  const double expected_offsets[] = {1.5, 0.05, 1.2};
+  for (int f = 0; f < 3; ++f) {
+    const PlanarPrimitive& face = fused[3 + f];
+    EXPECT_TRUE(face.plane.normal.isApprox(expected_normals[f], 1e-9)) << face.plane.normal.transpose();
+    EXPECT_NEAR(face.plane.signedDistance(expected_offsets[f] * expected_normals[f].cwiseAbs()), 0.0, 1e-6);
+    // The faces span the grown box: x up to 1.5, y up to 1.2.
+    double x_max = 0.0, y_max = 0.0;
+    for (const auto& p : face.points) {
+      x_max = std::max(x_max, double(p.x));
+      y_max = std::max(y_max, double(p.y));
+    }
+    if (f != 0) EXPECT_NEAR(x_max, 1.5, 1e-6);
+    if (f == 0) EXPECT_NEAR(y_max, 1.2, 1e-6);
+  }
+  // Points inside the seen box change nothing: the result of the test above.
+  options.known_extent_points = {{0.5, 0.5, 0.5}};
+  const auto unchanged = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(unchanged.size(), 6u);
+  EXPECT_NEAR(unchanged[3].plane.signedDistance({0.95, 0, 0}), 0.0, 1e-6);
+  options.known_extent_points = {{std::nan(""), 0.0, 0.0}};
+  EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+}
+
 TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
   // seenBottomAndSide() (box x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375]) plus a seen step:
   // a floor at z = 0.5 facing up over x in [0.5, 0.95]. Above the floor the part is not there:

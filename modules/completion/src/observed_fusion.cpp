@@ -406,6 +406,9 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     throw InvalidInputError("fuseWithObserved: fill_spacing must be 0 (off) or at least " +
                             std::to_string(kMinFillSpacing) + " of the diagonal, got " +
                             std::to_string(options.fill_spacing));
+  for (std::size_t i = 0; i < options.known_extent_points.size(); ++i)
+    if (!options.known_extent_points[i].allFinite())
+      throw InvalidInputError("fuseWithObserved: known extent point " + std::to_string(i) + " is not finite");
   ObservedFusionReport counts;
   const double max_angle = options.max_angle_degrees * kPi / 180.0;
   const double max_distance = options.max_distance * diagonalOf(observed);
@@ -472,7 +475,9 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     for (std::size_t c = 0; c < completed.size(); ++c)
       if (!snapped[c] && !absorbed[c] && alignWithNearest(completed[c], directions, max_align)) ++counts.aligned;
   }
-  const SeenBox seen_box = seenBox(observed, seen_normals);
+  SeenBox seen_box = seenBox(observed, seen_normals);
+  if (!seen_box.box.isEmpty())
+    for (const Eigen::Vector3d& p : options.known_extent_points) seen_box.box.extend(seen_box.axes.transpose() * p);
   std::vector<bool> clipped(completed.size(), false);
   if (std::isfinite(options.clip_margin) && !observed.empty()) {
     // Observed points lie inside by construction: only predicted ones go.

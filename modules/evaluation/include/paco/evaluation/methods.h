@@ -99,6 +99,10 @@ struct MethodOptions {
   double fill_box_spacing = 0.02;
   /// paco, with fusion: paco::ObservedFusionOptions::unseen_point_fraction (1 = all).
   double unseen_point_fraction = 0.25;
+  /// paco, with fusion: give the box fill the GT's points as the object's known extent
+  /// (paco::ObservedFusionOptions::known_extent_points). An oracle for analysis: what the
+  /// pipeline scores when the part's extent is known (default false).
+  bool known_extent_oracle = false;
   /// paco: LibTorch threads (process-wide, set when the model is first loaded; default 1, since
   /// the evaluation runs samples in parallel with --jobs).
   int completion_threads = 1;
