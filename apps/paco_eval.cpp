@@ -144,9 +144,10 @@ int single(const Options& o) {
   const ev::MeshMetrics m = o.input.empty() ? ev::evaluateMesh(pred, gt, options) : ev::evaluateMesh(pred, gt, seen, options);
   timer.stop();
   const ev::FailureReason reason = ev::classifyMesh(pred);
-  std::printf("CD=%.4f (pred->GT %.4f, GT->pred %.4f) HD=%.4f NC=%.4f #f=%zu #v=%zu closed=%s", m.chamfer,
-              m.chamfer_pred_to_gt, m.chamfer_gt_to_pred, m.hausdorff, m.normal_consistency, m.num_faces,
-              m.num_vertices, m.closed ? "yes" : "no");
+  std::printf("CD=%.4f (pred->GT %.4f, GT->pred %.4f) HD=%.4f (pred->GT %.4f, GT->pred %.4f) NC=%.4f #f=%zu #v=%zu "
+              "closed=%s",
+              m.chamfer, m.chamfer_pred_to_gt, m.chamfer_gt_to_pred, m.hausdorff, m.hausdorff_pred_to_gt,
+              m.hausdorff_gt_to_pred, m.normal_consistency, m.num_faces, m.num_vertices, m.closed ? "yes" : "no");
   if (!std::isnan(m.volume_ratio)) std::printf(" volume_ratio=%.4f", m.volume_ratio);
   std::printf("\n");
   if (!o.input.empty()) {

@@ -91,6 +91,8 @@ SurfaceDistances compare(const SurfaceSample& predicted, const SurfaceSample& re
   d.chamfer_gt_to_pred = backward.mean_distance;
   d.chamfer = forward.mean_distance + backward.mean_distance;
   d.hausdorff = std::max(forward.max_distance, backward.max_distance);
+  d.hausdorff_pred_to_gt = forward.max_distance;
+  d.hausdorff_gt_to_pred = backward.max_distance;
   d.normal_consistency = 0.5 * (forward.mean_normal_agreement + backward.mean_normal_agreement);
   return d;
 }
@@ -155,6 +157,8 @@ MeshMetrics measure(const SurfaceMesh& predicted, const SurfaceMesh& reference, 
   m.chamfer_pred_to_gt = d.chamfer_pred_to_gt * options.distance_scale;
   m.chamfer_gt_to_pred = d.chamfer_gt_to_pred * options.distance_scale;
   m.hausdorff = d.hausdorff * options.distance_scale;
+  m.hausdorff_pred_to_gt = d.hausdorff_pred_to_gt * options.distance_scale;
+  m.hausdorff_gt_to_pred = d.hausdorff_gt_to_pred * options.distance_scale;
   m.normal_consistency = d.normal_consistency;
   m.num_faces = predicted.faces.size();
   m.num_vertices = predicted.vertices.size();

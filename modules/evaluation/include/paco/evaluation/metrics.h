@@ -44,6 +44,7 @@ struct SurfaceDistances {
   double chamfer_pred_to_gt = 0.0;  ///< mean NN distance pred->GT: surface the prediction has where the GT has none
   double chamfer_gt_to_pred = 0.0;  ///< mean NN distance GT->pred: GT surface the prediction misses
   double hausdorff = 0.0;           ///< max of the two directed Hausdorff distances
+  double hausdorff_pred_to_gt = 0.0, hausdorff_gt_to_pred = 0.0;  ///< the directed Hausdorff distances
   double normal_consistency = 1.0;  ///< mean |n_pred . n_gt| at nearest neighbours, both directions averaged
 };
 
@@ -58,6 +59,9 @@ struct MeshMetrics {
   /// surface (GT->pred), which CD alone does not.
   double chamfer_pred_to_gt = 0.0, chamfer_gt_to_pred = 0.0;
   double hausdorff = 0.0;           ///< HD, x distance_scale, in the GT's normalised frame
+  /// The two directed Hausdorff distances (x distance_scale); HD is the larger. They tell a
+  /// stray face (pred->GT) from a missed feature (GT->pred).
+  double hausdorff_pred_to_gt = 0.0, hausdorff_gt_to_pred = 0.0;
   double normal_consistency = 0.0;  ///< NC in [0, 1]
   std::size_t num_faces = 0;        ///< polygon faces of the prediction (#f)
   std::size_t num_vertices = 0;     ///< vertices of the prediction (#v)
