@@ -3,16 +3,19 @@
 // reported alike.
 #include "app_support.h"
 
+#include <paco/common/error.h>
 #include <paco/common/normalization.h>
 #include <paco/completion/observed_fusion.h>
 #include <paco/completion/turn_ensemble.h>
+#include <paco/io/cloud_io.h>
 
 #include <Eigen/Geometry>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -70,14 +73,24 @@ inline void checkTurns(int turns) {
 /// The --known-extent option of the tools that fuse (ObservedFusionOptions::known_extent_points).
 inline void addKnownExtentOption(boost::program_options::options_description& options, std::string& text) {
   options.add_options()("known-extent", boost::program_options::value(&text),
-                        "X0,Y0,Z0,X1,Y1,Z1: the box the object is known to fill, in the input's units and frame; "
-                        "the hidden side is closed at this box instead of the scan's (with fusion)");
+                        "X0,Y0,Z0,X1,Y1,Z1 (a box), or a cloud file of points (e.g. a footprint's corners at ground "
+                        "and roof height): where the object is known to reach, in the input's units and frame; the "
+                        "hidden side is closed there instead of at the scan's box (with fusion)");
 }
 
-/// The corners of the box "X0,Y0,Z0,X1,Y1,Z1" (--known-extent); none for empty text. Throws
-/// UsageError unless it is six finite numbers with X0 <= X1, Y0 <= Y1 and Z0 <= Z1.
+/// The points of --known-extent: the cloud in the file `text` names when it exists, else the
+/// corners of the box "X0,Y0,Z0,X1,Y1,Z1"; none for empty text. Throws UsageError unless the box
+/// is six finite numbers with X0 <= X1, Y0 <= Y1 and Z0 <= Z1, and IoError for a cloud file that
+/// cannot be read.
 inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
   if (text.empty()) return {};
+  if (std::filesystem::is_regular_file(text)) {
+    const io::LabelledCloud cloud = io::loadCloud(text);  // rejects non-finite points
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& p : cloud.points) points.emplace_back(p.x, p.y, p.z);
+    if (points.empty()) throw IoError("--known-extent: '" + text + "' has no points");
+    return points;
+  }
   std::vector<double> values;
   std::size_t start = 0;
   while (start <= text.size()) {
@@ -91,8 +104,8 @@ inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
       used = 0;
     }
     if (used == 0 || used != item.size() || !std::isfinite(value))
-      throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers); '" + item + "' in '" + text +
-                       "' is not a finite number");
+      throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers) or an existing cloud file; '" + item +
+                       "' in '" + text + "' is not a finite number");
     values.push_back(value);
     start = comma + 1;
   }

@@ -202,6 +202,15 @@ TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
   paco::boundingBox(mesh, lo, hi);
   EXPECT_NEAR(hi.x(), 2.0, 0.01) << log;
   EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 0.05) << log;
+  // The same extent as a cloud of the points the object reaches.
+  paco::test::writeBytes(dir.file("reach.xyz"), "0 0 0\n2 1 1\n");
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("from_file.obj")) + " --known-extent " +
+                                       quoted(dir.file("reach.xyz")),
+                                   &log),
+            0)
+      << log;
+  paco::boundingBox(paco::io::loadMesh(dir.file("from_file.obj")), lo, hi);
+  EXPECT_NEAR(hi.x(), 2.0, 0.01) << log;
   // Without it the mesh ends with the scan.
   ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("seen.obj")), &log), 0) << log;
   paco::boundingBox(paco::io::loadMesh(dir.file("seen.obj")), lo, hi);
@@ -214,6 +223,8 @@ TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
   EXPECT_NE(log.find("six numbers), got 3"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,x", &log), 2) << log;
   EXPECT_NE(log.find("'x' in '0,0,0,1,1,x' is not a finite number"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(bad + quoted(dir.file("no_such_footprint.xyz")), &log), 2) << log;
+  EXPECT_NE(log.find("or an existing cloud file"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "2,0,0,1,1,1", &log), 2) << log;
   EXPECT_NE(log.find("must not exceed"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,1 --no-fusion", &log), 2) << log;
