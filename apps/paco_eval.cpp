@@ -128,7 +128,6 @@ int single(const Options& o) {
   timer.start("load");
   const paco::SurfaceMesh pred = loadForEvaluation(o.pred, "predicted");
   const paco::SurfaceMesh gt = loadForEvaluation(o.gt, "ground-truth");
-  timer.stop();
   std::vector<Eigen::Vector3d> seen;
   if (!o.input.empty()) {
     const paco::io::LabelledCloud input = paco::io::loadCloud(o.input);
