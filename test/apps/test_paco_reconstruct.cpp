@@ -215,7 +215,50 @@ TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
   ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("seen.obj")), &log), 0) << log;
   paco::boundingBox(paco::io::loadMesh(dir.file("seen.obj")), lo, hi);
   EXPECT_NEAR(hi.x(), 1.0, 0.01) << log;
+}
 
+// A building-like case: the box and its scan turned by 30 degrees about z, the extent given as
+// the turned box's corners (a footprint at ground and roof height). The fill's box lies on the
+// seen walls' axes, so it encloses those corners tightly: the full box, volume 2.
+TEST(PacoReconstruct, AKnownFootprintInOtherAxesClosesTheTurnedBox) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const paco::SurfaceSample surface = paco::sampleSurface(paco::test::makeBox({0, 0, 0}, {2, 1, 1}), 8000, 3);
+  paco::io::LabelledCloud scan;
+  for (std::size_t i = 0; i < surface.points.size(); ++i) {
+    if (surface.points[i].x() > 1.0) continue;
+    const Eigen::Vector3d q = turn * surface.points[i], n = turn * surface.normals[i];
+    pcl::PointNormal p;
+    p.x = float(q.x()), p.y = float(q.y()), p.z = float(q.z());
+    p.normal_x = float(n.x()), p.normal_y = float(n.y()), p.normal_z = float(n.z());
+    scan.points.push_back(p);
+  }
+  scan.has_normals = true;
+  paco::io::saveCloud(dir.file("turned_half_box.pcd"), scan);
+  std::string footprint;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d corner = turn * Eigen::Vector3d((i & 1) ? 2 : 0, (i & 2) ? 1 : 0, (i & 4) ? 1 : 0);
+    footprint += std::to_string(corner.x()) + " " + std::to_string(corner.y()) + " " + std::to_string(corner.z()) + "\n";
+  }
+  paco::test::writeBytes(dir.file("footprint.xyz"), footprint);
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("turned_half_box.pcd")) + " --model " +
+                                       quoted(dir.file("tiny.pt")) + " --threshold 1 --assembler cell-complex -o " +
+                                       quoted(dir.file("turned.obj")) + " --known-extent " +
+                                       quoted(dir.file("footprint.xyz")),
+                                   &log),
+            0)
+      << log;
+  const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("turned.obj"));
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 0.05) << log;
+}
+
+TEST(PacoReconstruct, AKnownExtentMustBeABoxOrACloud) {
+  TempDir dir;
+  std::string log;
   // Anything but six finite numbers with X0 <= X1 is a usage error, and so is a known extent
   // without the fusion that uses it.
   const std::string bad = tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("bad.obj")) + " --known-extent ";
