@@ -307,8 +307,11 @@ TEST(ObservedFusion, AKnownExtentMovesTheFilledFacesOutToIt) {
       x_max = std::max(x_max, double(p.x));
       y_max = std::max(y_max, double(p.y));
     }
-    if (f != 0) EXPECT_NEAR(x_max, 1.5, 1e-6);
-    if (f == 0) EXPECT_NEAR(y_max, 1.2, 1e-6);
+    if (f == 0) {
+      EXPECT_NEAR(y_max, 1.2, 1e-6);
+    } else {
+      EXPECT_NEAR(x_max, 1.5, 1e-6);
+    }
   }
   // Points inside the seen box change nothing: the result of the test above.
   options.known_extent_points = {{0.5, 0.5, 0.5}};
