@@ -171,25 +171,32 @@ TEST(PacoReconstruct, FusionKeepsTheSeenFacesWhenTheNetworkKeepsNothing) {
   EXPECT_EQ(filesIn(out_dir), 0u);
 }
 
+// A scan of the box [0,2] x [0,1] x [0,1] that stopped at x = 1 (points and normals), turned by
+// `turn`, written to `path`.
+namespace {
+void writeHalfBoxScan(const std::string& path, const Eigen::Matrix3d& turn) {
+  const paco::SurfaceSample surface = paco::sampleSurface(paco::test::makeBox({0, 0, 0}, {2, 1, 1}), 8000, 3);
+  paco::io::LabelledCloud scan;
+  scan.has_normals = true;
+  for (std::size_t i = 0; i < surface.points.size(); ++i) {
+    if (surface.points[i].x() > 1.0) continue;
+    const Eigen::Vector3d q = turn * surface.points[i], n = turn * surface.normals[i];
+    pcl::PointNormal p;
+    p.x = float(q.x()), p.y = float(q.y()), p.z = float(q.z());
+    p.normal_x = float(n.x()), p.normal_y = float(n.y()), p.normal_z = float(n.z());
+    scan.points.push_back(p);
+  }
+  paco::io::saveCloud(path, scan);
+}
+}  // namespace
+
 // A scan of the box [0,2] x [0,1] x [0,1] that stopped at x = 1 ends there; told that the object
 // reaches x = 2, the box fill closes the hidden side there, and the mesh reaches it.
 TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
   TempDir dir;
   paco::PacoNetwork network(paco::test::tinyModelConfig());
   paco::saveCheckpoint(dir.file("tiny.pt"), network);
-  const paco::SurfaceSample surface = paco::sampleSurface(paco::test::makeBox({0, 0, 0}, {2, 1, 1}), 8000, 3);
-  paco::io::LabelledCloud scan;
-  scan.has_normals = true;
-  for (std::size_t i = 0; i < surface.points.size(); ++i) {
-    const Eigen::Vector3d& q = surface.points[i];
-    if (q.x() > 1.0) continue;
-    pcl::PointNormal p;
-    p.x = float(q.x()), p.y = float(q.y()), p.z = float(q.z());
-    p.normal_x = float(surface.normals[i].x()), p.normal_y = float(surface.normals[i].y());
-    p.normal_z = float(surface.normals[i].z());
-    scan.points.push_back(p);
-  }
-  paco::io::saveCloud(dir.file("half_box.pcd"), scan);
+  writeHalfBoxScan(dir.file("half_box.pcd"), Eigen::Matrix3d::Identity());
   const std::string base = tool() + " " + quoted(dir.file("half_box.pcd")) + " --model " + quoted(dir.file("tiny.pt")) +
                            " --threshold 1 --assembler cell-complex -o ";
   std::string log;
@@ -224,19 +231,9 @@ TEST(PacoReconstruct, AKnownFootprintInOtherAxesClosesTheTurnedBox) {
   TempDir dir;
   paco::PacoNetwork network(paco::test::tinyModelConfig());
   paco::saveCheckpoint(dir.file("tiny.pt"), network);
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const paco::SurfaceSample surface = paco::sampleSurface(paco::test::makeBox({0, 0, 0}, {2, 1, 1}), 8000, 3);
-  paco::io::LabelledCloud scan;
-  for (std::size_t i = 0; i < surface.points.size(); ++i) {
-    if (surface.points[i].x() > 1.0) continue;
-    const Eigen::Vector3d q = turn * surface.points[i], n = turn * surface.normals[i];
-    pcl::PointNormal p;
-    p.x = float(q.x()), p.y = float(q.y()), p.z = float(q.z());
-    p.normal_x = float(n.x()), p.normal_y = float(n.y()), p.normal_z = float(n.z());
-    scan.points.push_back(p);
-  }
-  scan.has_normals = true;
-  paco::io::saveCloud(dir.file("turned_half_box.pcd"), scan);
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  writeHalfBoxScan(dir.file("turned_half_box.pcd"), turn);
   std::string footprint;
   for (int i = 0; i < 8; ++i) {
     const Eigen::Vector3d corner = turn * Eigen::Vector3d((i & 1) ? 2 : 0, (i & 2) ? 1 : 0, (i & 4) ? 1 : 0);
