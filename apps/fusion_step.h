@@ -5,13 +5,14 @@
 
 #include <paco/common/error.h>
 #include <paco/common/normalization.h>
+#include <paco/common/point_types.h>
 #include <paco/completion/observed_fusion.h>
 #include <paco/completion/turn_ensemble.h>
 #include <paco/io/cloud_io.h>
 
 #include <Eigen/Geometry>
+#include <boost/algorithm/string.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -85,17 +86,14 @@ inline void addKnownExtentOption(boost::program_options::options_description& op
 inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
   if (text.empty()) return {};
   if (std::filesystem::is_regular_file(text)) {
-    const io::LabelledCloud cloud = io::loadCloud(text);  // rejects non-finite points
-    std::vector<Eigen::Vector3d> points;
-    for (const auto& p : cloud.points) points.emplace_back(p.x, p.y, p.z);
+    const std::vector<Eigen::Vector3d> points = positionsOf(io::loadCloud(text).points);  // finite: checked
     if (points.empty()) throw IoError("--known-extent: '" + text + "' has no points");
     return points;
   }
+  std::vector<std::string> items;
+  boost::algorithm::split(items, text, boost::is_any_of(","));
   std::vector<double> values;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    const std::string item = text.substr(start, comma - start);
+  for (const std::string& item : items) {
     std::size_t used = 0;
     double value = std::nan("");
     try {
@@ -107,16 +105,15 @@ inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
       throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers) or an existing cloud file; '" + item +
                        "' in '" + text + "' is not a finite number");
     values.push_back(value);
-    start = comma + 1;
   }
   if (values.size() != 6)
     throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers), got " + std::to_string(values.size()));
-  const Eigen::Vector3d lo(values[0], values[1], values[2]), hi(values[3], values[4], values[5]);
-  if ((lo.array() > hi.array()).any())
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(values[0], values[1], values[2]),
+                                Eigen::Vector3d(values[3], values[4], values[5]));
+  if ((box.min().array() > box.max().array()).any())
     throw UsageError("--known-extent: X0,Y0,Z0 must not exceed X1,Y1,Z1 (got '" + text + "')");
   std::vector<Eigen::Vector3d> corners;
-  for (int i = 0; i < 8; ++i)
-    corners.emplace_back((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
+  for (int i = 0; i < 8; ++i) corners.push_back(box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i)));
   return corners;
 }
 

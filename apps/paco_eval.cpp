@@ -5,6 +5,7 @@
 #include "app_support.h"
 
 #include <paco/common/error.h>
+#include <paco/common/point_types.h>
 #include <paco/common/progress.h>
 #include <paco/evaluation/benchmark.h>
 #include <paco/evaluation/metrics.h>
@@ -133,7 +134,7 @@ int single(const Options& o) {
     const paco::io::LabelledCloud input = paco::io::loadCloud(o.input);
     if (input.points.empty())
       throw paco::InvalidInputError("input cloud '" + o.input + "' has no points; give the partial scan the mesh was made from");
-    for (const auto& p : input.points) seen.emplace_back(p.x, p.y, p.z);
+    seen = paco::positionsOf(input.points);
   }
   timer.stop();
   ev::MetricOptions options;

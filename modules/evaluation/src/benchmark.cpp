@@ -1,6 +1,7 @@
 #include <paco/evaluation/benchmark.h>
 
 #include <paco/common/error.h>
+#include <paco/common/point_types.h>
 #include <paco/common/progress.h>
 
 #ifdef PACO_EVALUATION_WITH_DATA
@@ -68,14 +69,6 @@ struct Combination {
   std::string method, assembler;
 };
 
-// The partial input's positions: they split GT->pred into the seen and the hidden GT surface.
-std::vector<Eigen::Vector3d> seenPoints(const data::Sample& sample) {
-  std::vector<Eigen::Vector3d> seen;
-  seen.reserve(sample.input.size());
-  for (const auto& p : sample.input) seen.emplace_back(p.x, p.y, p.z);
-  return seen;
-}
-
 EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_mesh, const MeshMetrics& failure_score,
                               const Combination& combination, const BenchmarkOptions& options) {
   MethodInput in;
@@ -108,7 +101,7 @@ EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_
   const auto start = std::chrono::steady_clock::now();
   if (r.reason == FailureReason::None) {
     try {
-      const MeshMetrics m = evaluateMesh(out.mesh, gt_mesh, seenPoints(sample), options.metrics);
+      const MeshMetrics m = evaluateMesh(out.mesh, gt_mesh, positionsOf(sample.input), options.metrics);
       r.setScores(m);
       r.num_faces = m.num_faces;
       r.num_vertices = m.num_vertices;
@@ -234,7 +227,8 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
         }
         if (!todo.empty()) {
           gt_mesh = dataset.loadGtMesh(sample);
-          failure_score = evaluateFailure(gt_mesh, seenPoints(sample), options.metrics, options.failure_box);
+          // The partial input splits GT->pred into the seen and the hidden GT surface.
+          failure_score = evaluateFailure(gt_mesh, positionsOf(sample.input), options.metrics, options.failure_box);
         }
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex);

@@ -1,6 +1,7 @@
 #include <paco/evaluation/methods.h>
 
 #include <paco/common/error.h>
+#include <paco/common/point_types.h>
 #include <paco/common/normalization.h>
 
 #ifdef PACO_EVALUATION_WITH_ASSEMBLY
@@ -264,8 +265,7 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     fusion.clip_margin = options.clip_margin;
     fusion.fill_spacing = options.fill_box_spacing;
     fusion.unseen_point_fraction = options.unseen_point_fraction;
-    if (options.known_extent_oracle)
-      for (const auto& p : in.gt_points) fusion.known_extent_points.emplace_back(p.x, p.y, p.z);
+    if (options.known_extent_oracle) fusion.known_extent_points = positionsOf(in.gt_points);
     primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation), fusion);
     out.seconds["fuse"] = secondsSince(fuse_start);
   }

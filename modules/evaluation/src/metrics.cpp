@@ -22,11 +22,11 @@ struct Directed {
   double mean_normal_agreement = 0.0;
 };
 
-pcl::PointCloud<pcl::PointXYZ>::Ptr toCloud(const SurfaceSample& sample) {
+pcl::PointCloud<pcl::PointXYZ>::Ptr toCloud(const std::vector<Eigen::Vector3d>& points) {
   auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  cloud->resize(sample.points.size());
-  for (std::size_t i = 0; i < sample.points.size(); ++i) {
-    const Eigen::Vector3d& p = sample.points[i];
+  cloud->resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     (*cloud)[i] = pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
   }
   return cloud;
@@ -82,8 +82,8 @@ SurfaceDistances compare(const SurfaceSample& predicted, const SurfaceSample& re
   checkSample(predicted, "predicted");
   checkSample(reference, "reference");
   pcl::KdTreeFLANN<pcl::PointXYZ> predicted_tree, reference_tree;
-  predicted_tree.setInputCloud(toCloud(predicted));
-  reference_tree.setInputCloud(toCloud(reference));
+  predicted_tree.setInputCloud(toCloud(predicted.points));
+  reference_tree.setInputCloud(toCloud(reference.points));
   const Directed forward = directed(predicted, reference, reference_tree);
   const Directed backward = directed(reference, predicted, predicted_tree, reference_distances);
   SurfaceDistances d;
@@ -102,13 +102,8 @@ SurfaceDistances compare(const SurfaceSample& predicted, const SurfaceSample& re
 std::vector<bool> seenSamples(const SurfaceSample& reference, const std::vector<Eigen::Vector3d>& seen, double radius) {
   std::vector<bool> is_seen(reference.points.size(), false);
   if (seen.empty()) return is_seen;
-  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  cloud->resize(seen.size());
-  for (std::size_t i = 0; i < seen.size(); ++i)
-    (*cloud)[i] = pcl::PointXYZ(static_cast<float>(seen[i].x()), static_cast<float>(seen[i].y()),
-                                static_cast<float>(seen[i].z()));
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  tree.setInputCloud(cloud);
+  tree.setInputCloud(toCloud(seen));
   std::vector<int> index(1);
   std::vector<float> squared(1);
   for (std::size_t i = 0; i < reference.points.size(); ++i) {
