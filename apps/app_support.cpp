@@ -55,6 +55,13 @@ double parseNonNegativeOrOff(const std::string& option, const std::string& text)
   return value;
 }
 
+std::string noisyScanNote(double set, double used) {
+  if (!(used > set)) return {};
+  char text[96];
+  std::snprintf(text, sizeof text, ", inlier distance raised to %.4f of the diagonal: the scan is noisy", used);
+  return text;
+}
+
 std::string shortNumber(double value) {
   std::ostringstream text;
   text << value;

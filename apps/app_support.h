@@ -33,6 +33,10 @@ double parseNonNegativeOrOff(const std::string& option, const std::string& text)
 /// A number as --help shows a default: "0.7", not "0.69999999999999996".
 std::string shortNumber(double value);
 
+/// ", inlier distance raised to X of the diagonal: the scan is noisy" when noise adaptation
+/// (PlanarSegmenter::setNoiseAdaptation) raised the segmenter's ε from `set` to `used`, else "".
+std::string noisyScanNote(double set, double used);
+
 /// The observed-fusion options paco_reconstruct, paco_complete and paco_eval share, with the
 /// same names and checks (paco::ObservedFusionOptions has their meaning). The defaults come from
 /// the library (paco::app::libraryFusionFlags() in fusion_step.h, or

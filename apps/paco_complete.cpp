@@ -36,6 +36,7 @@ struct Options {
   std::string segmenter = "gocopp";
   int min_points = 0;
   int min_parallel_points = 0;
+  double noise_adaptation = paco::kScanNoiseMultiple;
   double epsilon = 0.004;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   int turns = paco::TurnEnsembleOptions().turns;
@@ -83,6 +84,7 @@ int run(int argc, char** argv) {
   paco::app::addMaxPointsOption(visible, o.max_points);
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
+  paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
   paco::app::addTurnsOption(visible, o.turns);
   paco::app::addKnownExtentOption(visible, o.known_extent);
   o.fusion.addTo(visible);
@@ -111,6 +113,7 @@ int run(int argc, char** argv) {
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
+  paco::app::validateNoiseAdaptation(o.noise_adaptation);
   o.fusion.validate();
   if (o.threads < 0) throw paco::app::UsageError("--threads must be >= 0");
 
@@ -169,14 +172,16 @@ int run(int argc, char** argv) {
       segmentation.planes[s] = paco::Plane::fit(members);
     }
   } else {
-    paco::setScanMinimums(*segmenter, cloud->size(), o.min_points, o.min_parallel_points);
+    paco::setScanDefaults(*segmenter, cloud->size(), o.min_points, o.min_parallel_points, o.noise_adaptation);
     segmenter->setInputCloud(cloud);
     segmenter->segment(segmentation);
   }
   timer.stop();
-  std::printf("segment (%s): %zu planes, coverage %.1f %%\n",
-              o.use_labels ? "input labels" : o.segmenter.c_str(), segmentation.size(),
-              100.0 * segmentation.coverage());
+  const std::string noisy =
+      o.use_labels ? std::string()
+                   : paco::app::noisyScanNote(segmenter->getDistanceThreshold(), segmenter->getUsedDistanceThreshold());
+  std::printf("segment (%s%s): %zu planes, coverage %.1f %%\n", o.use_labels ? "input labels" : o.segmenter.c_str(),
+              noisy.c_str(), segmentation.size(), 100.0 * segmentation.coverage());
   if (segmentation.empty())
     throw paco::InvalidInputError("'" + o.input +
                                   "': no planar segment found; is it a piecewise-planar object?");

@@ -41,6 +41,7 @@ struct Options {
   std::string levels = "0,1,2", views = "0", output_dir, failure_box = "bbox", segmenter = "gocopp";
   int segment_min_points = 0;
   int segment_min_parallel_points = 0;
+  double segment_noise_adaptation = paco::evaluation::MethodOptions().segment_noise_adaptation;
   std::size_t limit = 0, samples = 10000, qem_faces = 40;
   unsigned jobs = 1;
   double time_limit = 60.0;
@@ -183,6 +184,9 @@ int dataset(const Options& o) {
   b.views = intList(o.views, "views");
   b.limit = o.limit;
   if (o.jobs < 1) throw paco::app::UsageError("--jobs must be at least 1");
+  if (!(o.segment_noise_adaptation >= 0.0 && std::isfinite(o.segment_noise_adaptation)))
+    throw paco::app::UsageError("--noise-adaptation must be 0 (off) or a positive number, got " +
+                                paco::app::shortNumber(o.segment_noise_adaptation));
   if (o.observed_fusion != "on" && o.observed_fusion != "off")
     throw paco::app::UsageError("--observed-fusion must be on or off, got '" + o.observed_fusion + "'");
   b.jobs = o.jobs;
@@ -194,6 +198,7 @@ int dataset(const Options& o) {
   b.method.segmenter = o.segmenter;
   b.method.segment_min_points = o.segment_min_points;
   b.method.segment_min_parallel_points = o.segment_min_parallel_points;
+  b.method.segment_noise_adaptation = o.segment_noise_adaptation;
   b.method.use_dataset_labels = o.dataset_labels;
   if (o.max_points != 0 && o.max_points < paco::evaluation::kMinInputPointBudget)
     throw paco::app::UsageError("--max-points must be 0 (keep all) or at least " +
@@ -260,6 +265,8 @@ int run(int argc, char** argv) {
       ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the input's points, at least 3)")
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
        "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the input's points; -1: none)")
+      ("noise-adaptation", po::value(&o.segment_noise_adaptation)->default_value(o.segment_noise_adaptation, paco::app::shortNumber(o.segment_noise_adaptation)),
+       "segmenter: on a noisy input, widen the inlier distance to this many times the estimated noise (0: off)")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")

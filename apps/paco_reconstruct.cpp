@@ -38,6 +38,7 @@ struct Options {
   std::string segmenter = "gocopp";
   int min_points = 0;
   int min_parallel_points = 0;
+  double noise_adaptation = paco::kScanNoiseMultiple;
   std::string model;
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   int turns = paco::TurnEnsembleOptions().turns;
@@ -97,6 +98,7 @@ int run(int argc, char** argv) {
   paco::app::addMaxPointsOption(visible, o.max_points);
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
+  paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
   paco::app::addTurnsOption(visible, o.turns);
   paco::app::addKnownExtentOption(visible, o.known_extent);
   o.fusion.addTo(visible);
@@ -121,6 +123,7 @@ int run(int argc, char** argv) {
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
+  paco::app::validateNoiseAdaptation(o.noise_adaptation);
   o.fusion.validate();
   if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
   if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
@@ -160,15 +163,18 @@ int run(int argc, char** argv) {
 
   timer.start("segment");
   paco::PlanarSegmentation segmentation;
-  paco::setScanMinimums(*segmenter, cloud->size(), o.min_points, o.min_parallel_points);
+  paco::setScanDefaults(*segmenter, cloud->size(), o.min_points, o.min_parallel_points, o.noise_adaptation);
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();
   const int parallel_points = segmenter->getMinPointsPerParallelPlane();
   const std::string parallel =
       parallel_points > 0 ? ", parallel to a larger one >= " + std::to_string(parallel_points) : std::string();
-  std::printf("segment (%s, planes of >= %d points%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
-              segmenter->getMinPointsPerPlane(), parallel.c_str(), segmentation.size(), 100.0 * segmentation.coverage());
+  const std::string noisy =
+      paco::app::noisyScanNote(segmenter->getDistanceThreshold(), segmenter->getUsedDistanceThreshold());
+  std::printf("segment (%s, planes of >= %d points%s%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
+              segmenter->getMinPointsPerPlane(), parallel.c_str(), noisy.c_str(), segmentation.size(),
+              100.0 * segmentation.coverage());
   if (segmentation.empty())
     throw paco::InvalidInputError("'" + o.input + "': no planar segment found; is it a piecewise-planar object?");
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

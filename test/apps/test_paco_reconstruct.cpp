@@ -21,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <regex>
 #include <string>
 
 namespace {
@@ -61,12 +62,13 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
                                         &log);
   ASSERT_EQ(rc, 0) << log;
   // By default the smallest plane is a share of the points (the sample has no repeated points),
-  // and a smaller share for planes parallel to a larger one.
+  // and a smaller share for planes parallel to a larger one; the sample's noise (0.5 % of the
+  // diagonal) widens the inlier distance.
   const paco::io::LabelledCloud cloud = paco::io::loadCloud(input);
   const std::string min_points = std::to_string(paco::scanMinPointsPerPlane(cloud.points.size()));
   const std::string min_parallel_points = std::to_string(paco::scanMinPointsPerParallelPlane(cloud.points.size(), 0));
   EXPECT_NE(log.find("segment (gocopp, planes of >= " + min_points + " points, parallel to a larger one >= " +
-                     min_parallel_points + ")"),
+                     min_parallel_points + ", inlier distance raised to"),
             std::string::npos)
       << log;
   EXPECT_NE(log.find("timing:"), std::string::npos) << log;
@@ -316,6 +318,51 @@ TEST(PacoReconstruct, MissingModelIsAClearError) {
   EXPECT_EQ(filesIn(dir.path()), 0u);
 }
 
+// The number of planes in the "segment (...): N planes" line of a log.
+std::size_t segmentedPlanes(const std::string& log) {
+  std::smatch m;
+  if (!std::regex_search(log, m, std::regex(R"(segment \(.*\): (\d+) planes)"))) return 0;
+  return std::stoul(m[1].str());
+}
+
+// The sample scan has noise of 0.5 % of its diagonal, more than the segmenter's inlier distance
+// (0.4 % of it): the tool widens the distance to the noise, and the part's faces are not broken
+// into many planes as with --noise-adaptation 0. A clean scan keeps the distance.
+TEST(PacoReconstruct, ANoisyScanWidensTheInlierDistance) {
+  TempDir dir;
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("adapted.obj")) +
+                                       " --no-completion --assembler cell-complex",
+                                   &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("inlier distance raised to"), std::string::npos) << log;
+  const std::size_t adapted_planes = segmentedPlanes(log);
+  EXPECT_TRUE(paco::analyseTopology(paco::io::loadMesh(dir.file("adapted.obj"))).isClosedManifold());
+
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("fixed.obj")) +
+                                       " --no-completion --assembler cell-complex --noise-adaptation 0",
+                                   &log),
+            0)
+      << log;
+  EXPECT_EQ(log.find("inlier distance raised"), std::string::npos) << log;
+  const std::size_t fixed_planes = segmentedPlanes(log);
+  // The part has 21 faces, about 15 of them seen.
+  EXPECT_GE(adapted_planes, 10u);
+  EXPECT_LE(adapted_planes, 21u);
+  EXPECT_GT(fixed_planes, adapted_planes + 5) << "adapted " << adapted_planes;
+
+  const std::string clean = dir.file("clean.pcd");
+  writeHalfBoxScan(clean, Eigen::Matrix3d::Identity());
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(clean) + " -o " + quoted(dir.file("clean.obj")) +
+                                       " --no-completion --assembler cell-complex",
+                                   &log),
+            0)
+      << log;
+  EXPECT_EQ(log.find("inlier distance raised"), std::string::npos) << log;
+  EXPECT_EQ(segmentedPlanes(log), 5u) << log;
+}
+
 TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   std::string log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()), &log), 2) << log;
@@ -336,6 +383,9 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--min-parallel-points must be -1 (none), 0 (0.5 % of the points) or at least 3, got 2"),
             std::string::npos)
       << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --noise-adaptation -1", &log), 2)
+      << log;
+  EXPECT_NE(log.find("--noise-adaptation must be 0 (off) or a positive number, got -1"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " --help", &log), 0) << log;
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
   EXPECT_NE(log.find("--fill-box"), std::string::npos);

@@ -30,6 +30,18 @@ LabelledSample partialLBracket() {
   return test::partialView(full, (test::obliqueRotation() * Eigen::Vector3d(1.6, -0.6, 1.2)).cast<float>(), 0.3);
 }
 
+// The box of cleanBox() with Gaussian noise of `fraction` of its diagonal on every coordinate;
+// the points keep their faces' true normals, as the MFCAD scans with noise do.
+LabelledSample noisyBox(double fraction) {
+  LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1.0, 0.8, 0.6}), 3000, 12);
+  const double diagonal = std::sqrt(1.0 + 0.64 + 0.36);
+  std::mt19937 rng(5);
+  std::normal_distribution<float> noise(0.0f, static_cast<float>(fraction * diagonal));
+  for (auto& p : *box.cloud)
+    for (int a = 0; a < 3; ++a) p.getVector3fMap()[a] += noise(rng);
+  return box;
+}
+
 class EveryBackend : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(EveryBackend, CleanBoxGivesSixPlanesWithinOneDegree) {
@@ -101,12 +113,8 @@ TEST_P(EveryBackend, PlanesWithEstimatedNormalsFaceOutwardsAlsoInAConcaveCorner)
 TEST_P(EveryBackend, NoisyBoxWithoutNormalsTakesNormalsFromMoreNeighbours) {
   // Noise of 1 % of the diagonal on every coordinate, about 40 % of the point spacing: from
   // 20 neighbours the estimated normals tilt so much that few points fit their face's plane.
-  LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1.0, 0.8, 0.6}), 3000, 12);
+  const LabelledSample box = noisyBox(0.01);
   const double diagonal = std::sqrt(1.0 + 0.64 + 0.36);
-  std::mt19937 rng(5);
-  std::normal_distribution<float> noise(0.0f, static_cast<float>(0.01 * diagonal));
-  for (auto& p : *box.cloud)
-    for (int a = 0; a < 3; ++a) p.getVector3fMap()[a] += noise(rng);
   auto seg = makePlanarSegmenter<pcl::PointXYZ>(GetParam());
   seg->setInputCloud(test::withoutNormals(*box.cloud));
   PlanarSegmentation result;
@@ -490,6 +498,75 @@ TEST(PlanarSegmenter, UsersCanAddABackendBySubclassing) {
   EXPECT_GT(std::abs(result.planes[0].normal.dot(expected)), 1 - 1e-9);
   EXPECT_NEAR(std::abs(result.planes[0].offset), 2.0 / std::sqrt(1.25), 1e-5);
   EXPECT_DOUBLE_EQ(result.coverage(), 1.0);
+}
+
+TEST(NoiseLevel, ReadsTheScatterOffTheSurface) {
+  auto clean = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  clean->setInputCloud(cleanBox().cloud);
+  PlanarSegmentation result;
+  clean->segment(result);
+  EXPECT_LT(clean->prepared().noiseLevel(kNoiseNeighbours, kNoiseQuantile), 1e-4);
+
+  // Noise of 1 % of the diagonal, about 0.01 in the working frame: the scatter off a plane
+  // fitted to the noisy neighbours themselves is a little less than that.
+  auto noisy = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  noisy->setInputCloud(noisyBox(0.01).cloud);
+  noisy->segment(result);
+  const double level = noisy->prepared().noiseLevel(kNoiseNeighbours, kNoiseQuantile);
+  EXPECT_GT(level, 0.005);
+  EXPECT_LT(level, 0.011);
+  EXPECT_THROW(noisy->prepared().noiseLevel(2, 0.25), InvalidInputError);
+  EXPECT_THROW(noisy->prepared().noiseLevel(20, 1.5), InvalidInputError);
+}
+
+TEST(NoiseAdaptation, ANoisyBoxGetsOnePlanePerFace) {
+  const LabelledSample box = noisyBox(0.01);
+  // The tools' plane minimums alone: the inlier band (0.4 % of the diagonal) is far below the
+  // noise, and the faces break into many planes.
+  auto narrow = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  setScanMinimums(*narrow, box.cloud->size(), 0, 0);
+  narrow->setInputCloud(box.cloud);
+  PlanarSegmentation fragments;
+  narrow->segment(fragments);
+  EXPECT_GT(fragments.size(), 12u);
+  EXPECT_DOUBLE_EQ(narrow->getUsedDistanceThreshold(), 0.004);
+
+  auto seg = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  setScanDefaults(*seg, box.cloud->size(), 0, 0);
+  EXPECT_DOUBLE_EQ(seg->getNoiseAdaptation(), kScanNoiseMultiple);
+  seg->setInputCloud(box.cloud);
+  PlanarSegmentation result;
+  seg->segment(result);
+  EXPECT_GT(seg->getUsedDistanceThreshold(), 0.01);
+  EXPECT_LE(seg->getUsedDistanceThreshold(), kMaxNoiseAdaptedDistance);
+  ASSERT_EQ(result.size(), box.plane_normals.size());
+  EXPECT_GT(result.coverage(), 0.9);
+  for (std::size_t f = 0; f < box.plane_normals.size(); ++f) {
+    bool matched = false;
+    for (const auto& plane : result.planes) matched |= plane.normal.dot(box.plane_normals[f]) > std::cos(2.0 * M_PI / 180.0);
+    EXPECT_TRUE(matched) << "face " << f << " normal " << box.plane_normals[f].transpose();
+  }
+}
+
+TEST(NoiseAdaptation, LeavesACleanScanAndTheDefaultAlone) {
+  auto seg = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  EXPECT_DOUBLE_EQ(seg->getNoiseAdaptation(), 0.0);
+  const LabelledSample box = cleanBox();
+  setScanDefaults(*seg, box.cloud->size(), 0, 0);
+  seg->setInputCloud(box.cloud);
+  PlanarSegmentation result;
+  seg->segment(result);
+  EXPECT_DOUBLE_EQ(seg->getUsedDistanceThreshold(), seg->getDistanceThreshold());
+  EXPECT_EQ(result.size(), 6u);
+
+  // Off by default: a noisy scan keeps the distance threshold it was given.
+  auto plain = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  plain->setDistanceThreshold(0.006);
+  plain->setInputCloud(noisyBox(0.01).cloud);
+  plain->segment(result);
+  EXPECT_DOUBLE_EQ(plain->getUsedDistanceThreshold(), 0.006);
+  EXPECT_THROW(plain->setNoiseAdaptation(-1.0), InvalidInputError);
+  EXPECT_THROW(plain->setNoiseAdaptation(std::numeric_limits<double>::quiet_NaN()), InvalidInputError);
 }
 
 }  // namespace

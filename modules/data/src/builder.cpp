@@ -107,7 +107,7 @@ PartSamples buildPart(const std::string& part, const SurfaceMesh& mesh, const Bu
         auto segmenter = makePlanarSegmenter<pcl::PointNormal>("gocopp");
         segmenter->setInputCloud(cloud);
         segmenter->setNumberOfThreads(1);
-        setScanMinimums(*segmenter, cloud->size(), info.segment_min_points, info.segment_min_parallel_points);
+        setScanDefaults(*segmenter, cloud->size(), info.segment_min_points, info.segment_min_parallel_points);
         PlanarSegmentation segmentation;
         segmenter->segment(segmentation);
         sample.labels = segmentation.labels;

@@ -33,6 +33,7 @@ namespace paco::evaluation {
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
 static_assert(kMinInputPointBudget == kMinPointBudget, "the evaluation's budget floor is the thinning's");
 static_assert(kDefaultInputPointBudget == kDefaultScanPointBudget, "the evaluation thins as paco_reconstruct");
+static_assert(kDefaultNoiseAdaptation == kScanNoiseMultiple, "the evaluation segments as the tools");
 #endif
 
 namespace {
@@ -93,7 +94,8 @@ std::map<std::string, Entry>& registry() {
     auto segmenter = makePlanarSegmenter<pcl::PointNormal>(options.segmenter);
     segmenter->setInputCloud(in.input.makeShared());
     segmenter->setNumberOfThreads(1);
-    setScanMinimums(*segmenter, in.input.size(), options.segment_min_points, options.segment_min_parallel_points);
+    setScanDefaults(*segmenter, in.input.size(), options.segment_min_points, options.segment_min_parallel_points,
+                    options.segment_noise_adaptation);
     segmenter->segment(seg);
 #else
     throw InvalidInputError("this build has no paco::segmentation; use the dataset's labels (--dataset-labels)");

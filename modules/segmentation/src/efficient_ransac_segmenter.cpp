@@ -70,7 +70,7 @@ void EfficientRansacSegmenter<PointT>::performSegmentation(std::vector<int>& lab
   typename Detector::Parameters parameters;
   parameters.probability = probability_;
   parameters.min_points = static_cast<std::size_t>(this->min_points_);
-  parameters.epsilon = this->distance_threshold_;
+  parameters.epsilon = this->used_distance_threshold_;
   parameters.normal_threshold = this->normal_threshold_;
   parameters.cluster_epsilon = cluster_epsilon_ > 0.0 ? cluster_epsilon_ : 3.0 * prepared.averageSpacing();
   detector.detect(parameters);

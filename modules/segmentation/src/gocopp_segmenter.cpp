@@ -29,7 +29,7 @@ void GoCoPPSegmenter<PointT>::setMaxRounds(int rounds) {
 template <typename PointT>
 void GoCoPPSegmenter<PointT>::performSegmentation(std::vector<int>& labels) {
   GoCoPPParameters parameters;
-  parameters.epsilon = this->distance_threshold_;  // the working frame has a unit diagonal
+  parameters.epsilon = this->used_distance_threshold_;  // the working frame has a unit diagonal
   parameters.normal_threshold = this->normal_threshold_;
   parameters.min_points = this->min_points_;
   parameters.neighbours = this->neighbours_;

@@ -33,6 +33,37 @@ const std::vector<std::vector<int>>& PreparedCloud::neighbours(int k) const {
   return neighbours_;
 }
 
+double PreparedCloud::noiseLevel(int k, double quantile) const {
+  if (k < 3) throw InvalidInputError("PreparedCloud::noiseLevel: k must be at least 3; got " + std::to_string(k));
+  if (!(quantile >= 0.0 && quantile <= 1.0))
+    throw InvalidInputError("PreparedCloud::noiseLevel: the quantile must be in [0, 1]; got " + std::to_string(quantile));
+  const std::size_t n = size();
+  if (n < 3) return 0.0;
+  const int wanted = std::min<int>(k + 1, static_cast<int>(n));
+  const std::size_t stride = std::max<std::size_t>(1, n / 5000);
+  std::vector<double> scatter;
+  pcl::Indices found;
+  std::vector<float> sq_distances;
+  for (std::size_t i = 0; i < n; i += stride) {
+    tree->nearestKSearch((*points)[i], wanted, found, sq_distances);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto j : found) mean += (*points)[static_cast<std::size_t>(j)].getVector3fMap().cast<double>();
+    mean /= static_cast<double>(found.size());
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    for (const auto j : found) {
+      const Eigen::Vector3d d = (*points)[static_cast<std::size_t>(j)].getVector3fMap().cast<double>() - mean;
+      covariance += d * d.transpose();
+    }
+    covariance /= static_cast<double>(found.size());
+    // The smallest eigenvalue is the mean squared distance to the best plane.
+    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues()[0];
+    scatter.push_back(std::sqrt(std::max(0.0, smallest)));
+  }
+  const std::size_t at = std::min(scatter.size() - 1, static_cast<std::size_t>(quantile * static_cast<double>(scatter.size() - 1) + 0.5));
+  std::nth_element(scatter.begin(), scatter.begin() + static_cast<std::ptrdiff_t>(at), scatter.end());
+  return scatter[at];
+}
+
 double PreparedCloud::averageSpacing() const {
   if (average_spacing_) return *average_spacing_;
   const std::size_t n = size();

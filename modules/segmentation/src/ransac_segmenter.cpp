@@ -37,7 +37,7 @@ void RansacSegmenter<PointT>::performSegmentation(std::vector<int>& labels) {
   pcl::SACSegmentation<pcl::PointNormal> sac(false);  // fixed seed: repeatable
   sac.setModelType(pcl::SACMODEL_PLANE);
   sac.setMethodType(pcl::SAC_RANSAC);
-  sac.setDistanceThreshold(this->distance_threshold_);
+  sac.setDistanceThreshold(this->used_distance_threshold_);
   sac.setMaxIterations(max_iterations_);
   sac.setOptimizeCoefficients(true);
   sac.setInputCloud(prepared.points);

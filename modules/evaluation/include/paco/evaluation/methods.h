@@ -37,6 +37,9 @@ constexpr std::size_t kDefaultInputPointBudget = 20000;
 /// The most test-time turns of `paco` (MethodOptions::ensemble_turns; paco::kMaxEnsembleTurns,
 /// restated so that tools built without the completion module can check their options).
 constexpr int kMaxEnsembleTurns = 24;
+/// The segmenter's default noise adaptation (MethodOptions::segment_noise_adaptation;
+/// paco::kScanNoiseMultiple, restated since paco::segmentation is optional here).
+constexpr double kDefaultNoiseAdaptation = 2.5;
 
 /// Parameters shared by every method.
 struct MethodOptions {
@@ -60,6 +63,10 @@ struct MethodOptions {
   /// paco::scanMinPointsPerParallelPlane reads it: 0 (default, as the tools) for 0.5 % of the
   /// input's points; > 0 (>= 3) a count; -1 none.
   int segment_min_parallel_points = 0;
+  /// Noise adaptation of the segmenter (PlanarSegmenter::setNoiseAdaptation): on a noisy input ε
+  /// widens to this many times the estimated noise; default paco::kScanNoiseMultiple, as the
+  /// tools; 0 off.
+  double segment_noise_adaptation = kDefaultNoiseAdaptation;
   /// Use the dataset's labels of the input points instead of running the segmenter (default
   /// false). The dataset's labels are GT face labels unless it was built with the segmenter.
   bool use_dataset_labels = false;

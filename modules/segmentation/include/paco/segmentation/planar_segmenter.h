@@ -61,6 +61,18 @@ inline int scanMinPointsPerParallelPlane(std::size_t points, int requested) {
   return detail::shareOfPoints(points, kScanMinParallelPlaneFraction);
 }
 
+/// The noise level PlanarSegmenter::setNoiseAdaptation reads: PreparedCloud::noiseLevel with
+/// these neighbours and this quantile (on clean MFCAD scans 0; with noise of 1 % of the
+/// diagonal about 0.8 % of it).
+constexpr int kNoiseNeighbours = 20;
+constexpr double kNoiseQuantile = 0.25;
+/// The largest ε noise adaptation sets (fraction of the diagonal): beyond it a scan is noise more
+/// than surface, and a wider ε would merge distinct faces.
+constexpr double kMaxNoiseAdaptedDistance = 0.05;
+/// The tools' noise adaptation (PlanarSegmenter::setNoiseAdaptation): ε is at least this many
+/// times the noise level.
+constexpr double kScanNoiseMultiple = 2.5;
+
 /// Base of every planar segmentation backend, shaped like a PCL algorithm: setInputCloud,
 /// setIndices, optional setInputNormals, parameter setters, then segment().
 ///
@@ -97,6 +109,18 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   /// diagonal of the (selected, finite) input. Range (0, 1); default 0.004.
   void setDistanceThreshold(double fraction_of_diagonal);
   double getDistanceThreshold() const { return distance_threshold_; }
+
+  /// Noisy scans: ε grows to `multiple` × the scan's noise level when that is larger (the
+  /// quarter quantile of the points' scatter off their 20-neighbour planes,
+  /// PreparedCloud::noiseLevel). A face scattered over more than ε splits into many small
+  /// planes, and the assembly then fails or carves slivers; on clean scans the level is about 0
+  /// and ε stays as set. Range >= 0; default 0 (off); the tools use kScanNoiseMultiple.
+  void setNoiseAdaptation(double multiple);
+  double getNoiseAdaptation() const { return noise_multiple_; }
+
+  /// The ε (fraction of the diagonal) the last segment() used: the distance threshold, or more
+  /// on a noisy scan with noise adaptation on.
+  double getUsedDistanceThreshold() const { return used_distance_threshold_; }
 
   /// τ, the smallest |cos| between a point's normal and its plane's normal for the point to join
   /// the plane. Range [0, 1]; default 0.85 (about 32°).
@@ -152,6 +176,10 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   using pcl::PCLBase<PointT>::deinitCompute;
 
   double distance_threshold_ = 0.004;
+  double noise_multiple_ = 0.0;
+  /// ε of the current segment() call, what the backends use (distance_threshold_ or, on a noisy
+  /// scan with noise adaptation on, more).
+  double used_distance_threshold_ = 0.004;
   double normal_threshold_ = 0.85;
   int min_points_ = 50;
   int min_parallel_points_ = 0;
@@ -171,12 +199,21 @@ std::vector<std::string> availablePlanarSegmenters();
 
 /// The tools' plane minimums for a cloud of `points` points: setMinPointsPerPlane(
 /// scanMinPointsPerPlane(points, min_points)) and setMinPointsPerParallelPlane(
-/// scanMinPointsPerParallelPlane(points, min_parallel_points)). paco_reconstruct, paco_complete,
-/// paco_eval and the data set's input labels all segment this way.
+/// scanMinPointsPerParallelPlane(points, min_parallel_points)); part of setScanDefaults.
 template <typename PointT>
 void setScanMinimums(PlanarSegmenter<PointT>& segmenter, std::size_t points, int min_points, int min_parallel_points) {
   segmenter.setMinPointsPerPlane(scanMinPointsPerPlane(points, min_points));
   segmenter.setMinPointsPerParallelPlane(scanMinPointsPerParallelPlane(points, min_parallel_points));
+}
+
+/// The tools' segmentation settings for a cloud of `points` points: setScanMinimums and noise
+/// adaptation (setNoiseAdaptation(noise_multiple); --noise-adaptation, 0 turns it off).
+/// paco_reconstruct, paco_complete, paco_eval and the data set's input labels all segment this way.
+template <typename PointT>
+void setScanDefaults(PlanarSegmenter<PointT>& segmenter, std::size_t points, int min_points, int min_parallel_points,
+                     double noise_multiple = kScanNoiseMultiple) {
+  setScanMinimums(segmenter, points, min_points, min_parallel_points);
+  segmenter.setNoiseAdaptation(noise_multiple);
 }
 
 /// A built-in backend by name (see availablePlanarSegmenters()). Throws InvalidInputError for an

@@ -58,6 +58,12 @@ struct PreparedCloud {
   const std::vector<std::vector<int>>& neighbours(int k) const;
   /// Mean distance of a point to its 6 nearest neighbours, averaged over the cloud (working frame).
   double averageSpacing() const;
+  /// How far points scatter off their surface (working frame): for each point, the RMS distance
+  /// of its k nearest neighbours and itself to their least-squares plane; the `quantile` of
+  /// those over the cloud (a subsample of at most 5,000 points on larger clouds). Neighbourhoods
+  /// across an edge scatter too, so a low quantile reads the flat parts: on clean scans it is
+  /// near 0, on noisy ones near the noise's standard deviation.
+  double noiseLevel(int k, double quantile) const;
 
  private:
   mutable std::vector<std::vector<int>> neighbours_;

@@ -24,6 +24,14 @@ void PlanarSegmenter<PointT>::setDistanceThreshold(double fraction_of_diagonal) 
 }
 
 template <typename PointT>
+void PlanarSegmenter<PointT>::setNoiseAdaptation(double multiple) {
+  if (!(multiple >= 0.0 && std::isfinite(multiple)))
+    throw InvalidInputError("PlanarSegmenter::setNoiseAdaptation: the multiple of the noise level must be finite "
+                            "and >= 0 (0: off); got " + std::to_string(multiple));
+  noise_multiple_ = multiple;
+}
+
+template <typename PointT>
 void PlanarSegmenter<PointT>::setNormalThreshold(double min_abs_cosine) {
   if (!(min_abs_cosine >= 0.0 && min_abs_cosine <= 1.0))
     throw InvalidInputError("PlanarSegmenter::setNormalThreshold: the normal threshold is a |cosine| "
@@ -114,6 +122,11 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
     options.viewpoint = viewpoint_;
     prepared_ = PreparedCloud{};
     detail::prepareCloud(gathered, std::move(source_indices), input_->size(), options, prepared_);
+    used_distance_threshold_ = distance_threshold_;
+    if (noise_multiple_ > 0.0 && !prepared_.collinear)
+      used_distance_threshold_ = std::min(kMaxNoiseAdaptedDistance,
+                                          std::max(distance_threshold_,
+                                                   noise_multiple_ * prepared_.noiseLevel(kNoiseNeighbours, kNoiseQuantile)));
     std::vector<int> labels(prepared_.size(), -1);
     if (!prepared_.collinear) performSegmentation(labels);
     if (labels.size() != prepared_.size())
@@ -125,7 +138,7 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
       // has no neighbourhood to vouch for it.
       const double min_abs_cosine = std::max(normal_threshold_, 0.94);
       detail::recoverParallelPlanes(prepared_, labels, smallest, static_cast<std::size_t>(min_parallel_points_),
-                                    distance_threshold_, min_abs_cosine);
+                                    used_distance_threshold_, min_abs_cosine);
       smallest = static_cast<std::size_t>(min_parallel_points_);
     }
     output = detail::finalizeSegmentation(prepared_, labels, smallest);
