@@ -565,6 +565,11 @@ TEST(NoiseAdaptation, LeavesACleanScanAndTheDefaultAlone) {
   plain->setInputCloud(noisyBox(0.01).cloud);
   plain->segment(result);
   EXPECT_DOUBLE_EQ(plain->getUsedDistanceThreshold(), 0.006);
+  // Adaptation only widens: an ε wider than the adapted one, even beyond its cap, stays.
+  plain->setNoiseAdaptation(kScanNoiseMultiple);
+  plain->setDistanceThreshold(0.08);
+  plain->segment(result);
+  EXPECT_DOUBLE_EQ(plain->getUsedDistanceThreshold(), 0.08);
   EXPECT_THROW(plain->setNoiseAdaptation(-1.0), InvalidInputError);
   EXPECT_THROW(plain->setNoiseAdaptation(std::numeric_limits<double>::quiet_NaN()), InvalidInputError);
 }

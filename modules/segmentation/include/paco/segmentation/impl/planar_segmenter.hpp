@@ -122,11 +122,13 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
     options.viewpoint = viewpoint_;
     prepared_ = PreparedCloud{};
     detail::prepareCloud(gathered, std::move(source_indices), input_->size(), options, prepared_);
+    // Adaptation only widens ε, and never beyond kMaxNoiseAdaptedDistance (a wider ε set by the
+    // user stays).
     used_distance_threshold_ = distance_threshold_;
     if (noise_multiple_ > 0.0 && !prepared_.collinear)
-      used_distance_threshold_ = std::min(kMaxNoiseAdaptedDistance,
-                                          std::max(distance_threshold_,
-                                                   noise_multiple_ * prepared_.noiseLevel(kNoiseNeighbours, kNoiseQuantile)));
+      used_distance_threshold_ = std::max(
+          distance_threshold_, std::min(kMaxNoiseAdaptedDistance,
+                                        noise_multiple_ * prepared_.noiseLevel(kNoiseNeighbours, kNoiseQuantile)));
     std::vector<int> labels(prepared_.size(), -1);
     if (!prepared_.collinear) performSegmentation(labels);
     if (labels.size() != prepared_.size())
