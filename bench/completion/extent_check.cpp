@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
       const paco::data::Sample sample = dataset.load(split, index);
       const auto cloud = sample.input.makeShared();
       auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>("gocopp");
-      paco::setScanMinimums(*segmenter, cloud->size(), 0, 0);
+      paco::setScanDefaults(*segmenter, cloud->size(), 0, 0);
       segmenter->setInputCloud(cloud);
       paco::PlanarSegmentation segmentation;
       segmenter->segment(segmentation);

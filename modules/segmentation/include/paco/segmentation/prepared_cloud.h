@@ -60,7 +60,7 @@ struct PreparedCloud {
   double averageSpacing() const;
   /// How far points scatter off their surface (working frame): for each point, the RMS distance
   /// of its k nearest neighbours and itself to their least-squares plane; the `quantile` of
-  /// those over the cloud (a subsample of at most 5,000 points on larger clouds). Neighbourhoods
+  /// those over the cloud (on clouds above 10,000 points, every (n / 5,000)-th). Neighbourhoods
   /// across an edge scatter too, so a low quantile reads the flat parts: on clean scans it is
   /// near 0, on noisy ones near the noise's standard deviation.
   double noiseLevel(int k, double quantile) const;
