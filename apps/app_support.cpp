@@ -62,6 +62,18 @@ std::string noisyScanNote(double set, double used) {
   return text;
 }
 
+void addNoiseAdaptationOption(boost::program_options::options_description& options, double& multiple) {
+  options.add_options()("noise-adaptation",
+                        boost::program_options::value(&multiple)->default_value(multiple, shortNumber(multiple)),
+                        "segmenter: on a noisy scan, widen the inlier distance to this many times the estimated noise "
+                        "(0: off)");
+}
+
+void validateNoiseAdaptation(double multiple) {
+  if (!(multiple >= 0.0 && std::isfinite(multiple)))
+    throw UsageError("--noise-adaptation must be 0 (off) or a positive number, got " + shortNumber(multiple));
+}
+
 std::string shortNumber(double value) {
   std::ostringstream text;
   text << value;

@@ -37,6 +37,11 @@ std::string shortNumber(double value);
 /// (PlanarSegmenter::setNoiseAdaptation) raised the segmenter's ε from `set` to `used`, else "".
 std::string noisyScanNote(double set, double used);
 
+/// --noise-adaptation M (PlanarSegmenter::setNoiseAdaptation) of paco_reconstruct, paco_complete
+/// and paco_eval, and its check: 0 (off) or a finite positive number, else a UsageError.
+void addNoiseAdaptationOption(boost::program_options::options_description& options, double& multiple);
+void validateNoiseAdaptation(double multiple);
+
 /// The observed-fusion options paco_reconstruct, paco_complete and paco_eval share, with the
 /// same names and checks (paco::ObservedFusionOptions has their meaning). The defaults come from
 /// the library (paco::app::libraryFusionFlags() in fusion_step.h, or

@@ -184,9 +184,7 @@ int dataset(const Options& o) {
   b.views = intList(o.views, "views");
   b.limit = o.limit;
   if (o.jobs < 1) throw paco::app::UsageError("--jobs must be at least 1");
-  if (!(o.segment_noise_adaptation >= 0.0 && std::isfinite(o.segment_noise_adaptation)))
-    throw paco::app::UsageError("--noise-adaptation must be 0 (off) or a positive number, got " +
-                                paco::app::shortNumber(o.segment_noise_adaptation));
+  paco::app::validateNoiseAdaptation(o.segment_noise_adaptation);
   if (o.observed_fusion != "on" && o.observed_fusion != "off")
     throw paco::app::UsageError("--observed-fusion must be on or off, got '" + o.observed_fusion + "'");
   b.jobs = o.jobs;
@@ -265,8 +263,6 @@ int run(int argc, char** argv) {
       ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the input's points, at least 3)")
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
        "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the input's points; -1: none)")
-      ("noise-adaptation", po::value(&o.segment_noise_adaptation)->default_value(o.segment_noise_adaptation, paco::app::shortNumber(o.segment_noise_adaptation)),
-       "segmenter: on a noisy input, widen the inlier distance to this many times the estimated noise (0: off)")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")
@@ -286,6 +282,7 @@ int run(int argc, char** argv) {
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");
+  paco::app::addNoiseAdaptationOption(visible, o.segment_noise_adaptation);  // direct, box-prior, paco
   o.fusion.addTo(visible);  // paco, with fusion
   const po::variables_map vm = paco::app::parseCommandLine(argc, argv, visible, {});
   if (vm.count("help")) {

@@ -10,7 +10,6 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
-#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -43,18 +42,6 @@ inline void validateMinParallelPoints(int min_points) {
   if (min_points != -1 && min_points != 0 && min_points < 3)
     throw UsageError("--min-parallel-points must be -1 (none), 0 (0.5 % of the points) or at least 3, got " +
                      std::to_string(min_points));
-}
-
-inline void addNoiseAdaptationOption(boost::program_options::options_description& options, double& multiple) {
-  options.add_options()("noise-adaptation",
-                        boost::program_options::value(&multiple)->default_value(multiple, shortNumber(multiple)),
-                        "segmenter: on a noisy scan, widen the inlier distance to this many times the estimated noise "
-                        "(0: off)");
-}
-
-inline void validateNoiseAdaptation(double multiple) {
-  if (!(multiple >= 0.0 && std::isfinite(multiple)))
-    throw UsageError("--noise-adaptation must be 0 (off) or a positive number, got " + shortNumber(multiple));
 }
 
 inline void validateMaxPoints(std::size_t max_points) {

@@ -14,6 +14,30 @@
 
 namespace paco {
 
+namespace {
+
+// Ascending eigenvalues of the covariance (about the mean, divided by the count) of the points
+// of `cloud` that `indices` names, or of all of them when it is null: the variances along the
+// principal axes; the smallest is the mean squared distance to the best plane.
+Eigen::Vector3d principalVariances(const pcl::PointCloud<pcl::PointNormal>& cloud, const pcl::Indices* indices) {
+  const std::size_t n = indices ? indices->size() : cloud.size();
+  const auto position = [&](std::size_t i) -> Eigen::Vector3d {
+    return cloud[indices ? static_cast<std::size_t>((*indices)[i]) : i].getVector3fMap().cast<double>();
+  };
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) mean += position(i);
+  mean /= static_cast<double>(n);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = position(i) - mean;
+    covariance += d * d.transpose();
+  }
+  covariance /= static_cast<double>(n);
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues();
+}
+
+}  // namespace
+
 const std::vector<std::vector<int>>& PreparedCloud::neighbours(int k) const {
   if (neighbours_k_ == k) return neighbours_;
   const std::size_t n = size();
@@ -46,18 +70,7 @@ double PreparedCloud::noiseLevel(int k, double quantile) const {
   std::vector<float> sq_distances;
   for (std::size_t i = 0; i < n; i += stride) {
     tree->nearestKSearch((*points)[i], wanted, found, sq_distances);
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto j : found) mean += (*points)[static_cast<std::size_t>(j)].getVector3fMap().cast<double>();
-    mean /= static_cast<double>(found.size());
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    for (const auto j : found) {
-      const Eigen::Vector3d d = (*points)[static_cast<std::size_t>(j)].getVector3fMap().cast<double>() - mean;
-      covariance += d * d.transpose();
-    }
-    covariance /= static_cast<double>(found.size());
-    // The smallest eigenvalue is the mean squared distance to the best plane.
-    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues()[0];
-    scatter.push_back(std::sqrt(std::max(0.0, smallest)));
+    scatter.push_back(std::sqrt(std::max(0.0, principalVariances(*points, &found)[0])));
   }
   const std::size_t at = std::min(scatter.size() - 1, static_cast<std::size_t>(quantile * static_cast<double>(scatter.size() - 1) + 0.5));
   std::nth_element(scatter.begin(), scatter.begin() + static_cast<std::ptrdiff_t>(at), scatter.end());
@@ -182,18 +195,8 @@ void prepareCloud(const pcl::PointCloud<pcl::PointNormal>& gathered, std::vector
 
   // Collinear points: the two largest principal variances carry everything.
   {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto& p : points) mean += p.getVector3fMap().cast<double>();
-    mean /= static_cast<double>(points.size());
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    for (const auto& p : points) {
-      const Eigen::Vector3d q = p.getVector3fMap().cast<double>() - mean;
-      covariance += q * q.transpose();
-    }
-    covariance /= static_cast<double>(points.size());
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
     // In the unit-diagonal frame, a spread below ~1e-6 across the line is float noise.
-    prepared.collinear = !(solver.eigenvalues()(1) > 1e-12);
+    prepared.collinear = !(principalVariances(points, nullptr)(1) > 1e-12);
     if (prepared.collinear)
       PCL_WARN("[paco::PlanarSegmenter] all %zu points are collinear: no plane can be segmented\n",
                points.size());
