@@ -37,8 +37,8 @@ std::string shortNumber(double value);
 /// (PlanarSegmenter::setNoiseAdaptation) raised the segmenter's ε from `set` to `used`, else "".
 std::string noisyScanNote(double set, double used);
 
-/// --noise-adaptation M (PlanarSegmenter::setNoiseAdaptation) of paco_reconstruct, paco_complete
-/// and paco_eval, and its check: 0 (off) or a finite positive number, else a UsageError.
+/// --noise-adaptation M (PlanarSegmenter::setNoiseAdaptation) of paco_reconstruct, paco_complete,
+/// paco_eval and paco_segment (the default is the caller's), and its check: 0 (off) or a finite positive number, else a UsageError.
 void addNoiseAdaptationOption(boost::program_options::options_description& options, double& multiple);
 void validateNoiseAdaptation(double multiple);
 

@@ -32,6 +32,8 @@ struct Options {
   int min_points = 50;
   int min_parallel_points = 0;
   int neighbours = 20;
+  // The class's default (off); paco_reconstruct and paco_complete widen by kScanNoiseMultiple.
+  double noise_adaptation = 0.0;
   unsigned int threads = 0;
   bool ignore_normals = false;
   // gocopp
@@ -55,7 +57,8 @@ void printHelp(const po::options_description& visible) {
             << "with a per-point \"label\" field (-1: no plane) and, with --vg, the planes and their point\n"
             << "groups for PolyFit / Easy3D (.vg ascii, .bvg binary). Distances are fractions of the\n"
             << "bounding-box diagonal, so the same settings work in any unit. Points with NaN/Inf\n"
-            << "coordinates are dropped with a warning; missing normals are estimated.\n\n"
+            << "coordinates are dropped with a warning; missing normals are estimated. On a noisy scan,\n"
+            << "--noise-adaptation 2.5 widens --epsilon to the noise, as paco_reconstruct does by default.\n\n"
             << "Backends: " << backends << " (default gocopp).\n\n"
             << visible << std::endl;
 }
@@ -73,6 +76,7 @@ paco::PlanarSegmenter<pcl::PointNormal>::Ptr makeSegmenter(const Options& o) {
   segmenter->setMinPointsPerParallelPlane(o.min_parallel_points);
   segmenter->setNumberOfNeighbours(o.neighbours);
   segmenter->setNumberOfThreads(o.threads);
+  segmenter->setNoiseAdaptation(o.noise_adaptation);
   if (auto* g = as<paco::GoCoPPSegmenter<pcl::PointNormal>>(segmenter)) {
     g->setLambdaSimplicity(o.lambda_simplicity);
     g->setLambdaCompleteness(o.lambda_completeness);
@@ -104,6 +108,7 @@ int run(int argc, char** argv) {
       ("neighbours,k", po::value(&o.neighbours)->default_value(o.neighbours), "neighbours for normal estimation and region growing")
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for normal estimation (0: all cores)")
       ("ignore-normals", po::bool_switch(&o.ignore_normals), "estimate normals even when the file has them");
+  paco::app::addNoiseAdaptationOption(general, o.noise_adaptation);
   po::options_description gocopp("gocopp options");
   gocopp.add_options()
       ("lambda-simplicity", po::value(&o.lambda_simplicity)->default_value(o.lambda_simplicity, "1"), "weight of the number of planes, [0, 3)")
@@ -137,6 +142,7 @@ int run(int argc, char** argv) {
     if (ext != ".vg" && ext != ".bvg") throw paco::app::UsageError("--vg must name a .vg or .bvg file, got '" + o.vg + "'");
   }
   // Check every parameter before reading a large file.
+  paco::app::validateNoiseAdaptation(o.noise_adaptation);
   paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
   try {
     segmenter = makeSegmenter(o);
@@ -166,8 +172,10 @@ int run(int argc, char** argv) {
   paco::PlanarSegmentation result;
   segmenter->segment(result);
   timer.stop();
-  std::printf("%s: %zu planes, coverage %.1f %%, %.3f s\n", segmenter->name().c_str(), result.size(),
-              100.0 * result.coverage(), timer.seconds("segment"));
+  std::printf("%s: %zu planes, coverage %.1f %%%s, %.3f s\n", segmenter->name().c_str(), result.size(),
+              100.0 * result.coverage(),
+              paco::app::noisyScanNote(o.epsilon, segmenter->getUsedDistanceThreshold()).c_str(),
+              timer.seconds("segment"));
 
   // Write the normals used (given or estimated) along with the labels.
   const auto& prepared = segmenter->prepared();

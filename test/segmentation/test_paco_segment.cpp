@@ -9,7 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <random>
 #include <set>
 #include <string>
 
@@ -62,6 +65,43 @@ TEST(PacoSegment, EstimatesMissingNormalsWithAnyBackend) {
   EXPECT_NE(log.find("region-growing: 6 planes"), std::string::npos) << log;
   const io::LabelledCloud labelled = io::loadCloud(output);
   EXPECT_TRUE(labelled.has_normals);
+}
+
+// A box with Gaussian noise of 1 % of its diagonal, far above the default inlier distance (0.4 %
+// of it): planes of 100 points or more then hold few of the points, unless --noise-adaptation
+// widens the distance to the noise.
+TEST(PacoSegment, NoiseAdaptationWidensTheInlierDistanceOnANoisyScan) {
+  test::TempDir dir;
+  const std::string input = dir.file("noisy.pcd");
+  auto box = test::sampleShape(test::makeBox({0, 0, 0}, {2.0, 1.5, 1.0}), 3000, 21);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.0f, 0.01f * std::sqrt(4.0f + 2.25f + 1.0f));
+  io::LabelledCloud cloud;
+  cloud.points = *box.cloud;
+  cloud.has_normals = true;
+  for (auto& p : cloud.points)
+    for (int a = 0; a < 3; ++a) p.getVector3fMap()[a] += noise(rng);
+  io::saveCloud(input, cloud);
+  const std::string tool = quoted(test::toolPath("paco_segment")) + " " + quoted(input) + " --min-points 100 -o ";
+  auto labelledShare = [](const std::string& path) {
+    const auto labels = io::loadCloud(path).labels;
+    return static_cast<double>(std::count_if(labels.begin(), labels.end(), [](int l) { return l >= 0; })) /
+           static_cast<double>(labels.size());
+  };
+
+  std::string log;
+  ASSERT_EQ(test::runCommand(tool + quoted(dir.file("fixed.pcd")), &log), 0) << log;
+  EXPECT_EQ(log.find("inlier distance raised"), std::string::npos) << log;
+  EXPECT_LT(labelledShare(dir.file("fixed.pcd")), 0.5) << log;
+
+  ASSERT_EQ(test::runCommand(tool + quoted(dir.file("adapted.pcd")) + " --noise-adaptation 2.5", &log), 0) << log;
+  EXPECT_NE(log.find("gocopp: 6 planes"), std::string::npos) << log;
+  EXPECT_NE(log.find("inlier distance raised to"), std::string::npos) << log;
+  EXPECT_GT(labelledShare(dir.file("adapted.pcd")), 0.9) << log;
+
+  EXPECT_EQ(test::runCommand(tool + quoted(dir.file("bad.pcd")) + " --noise-adaptation -1", &log), 2) << log;
+  EXPECT_NE(log.find("--noise-adaptation"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad.pcd")));
 }
 
 TEST(PacoSegment, HelpExitsZero) {
