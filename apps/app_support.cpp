@@ -2,7 +2,15 @@
 
 #include <paco/common/error.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+
+#include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -126,8 +134,39 @@ std::string temporaryName(const std::string& final_path) {
 }
 }  // namespace
 
+void checkOutputPath(const std::string& path, const std::string& option, const std::vector<std::string>& extensions) {
+  namespace fs = std::filesystem;
+  if (!extensions.empty()) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {
+      std::string list;
+      for (std::size_t i = 0; i < extensions.size(); ++i)
+        list += (i == 0 ? "" : i + 1 == extensions.size() ? " or " : ", ") + extensions[i];
+      throw UsageError(option + " must name a " + list + " file, got '" + path + "'");
+    }
+  }
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw UsageError(option + " '" + path + "' is a folder; give a file name");
+  const fs::path folder = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+  if (!fs::is_directory(folder, ec))
+    throw UsageError(option + " '" + path + "': the folder '" + folder.string() + "' does not exist; create it first");
+  // Create and remove a file there: permission bits alone miss read-only file systems, and root.
+  const fs::path probe = folder / ("." + fs::path(path).filename().string() + ".paco-write-check");
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+  if (fd < 0 && errno != EEXIST)
+    throw UsageError(option + " '" + path + "': cannot create files in the folder '" + folder.string() +
+                     "': " + std::strerror(errno));
+  if (fd >= 0) {
+    ::close(fd);
+    fs::remove(probe, ec);
+  }
+}
+
 PendingOutput::PendingOutput(std::string final_path)
-    : final_path_(std::move(final_path)), temp_path_(temporaryName(final_path_)) {}
+    : final_path_(std::move(final_path)), temp_path_(temporaryName(final_path_)) {
+  checkOutputPath(final_path_, "output", {});
+}
 
 PendingOutput::~PendingOutput() {
   if (!committed_) {

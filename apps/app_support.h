@@ -63,7 +63,13 @@ struct FusionFlags {
   double clipMargin() const;
 };
 
+/// Checks an output path before any slow work: its extension is one of `extensions` (lower case
+/// with the dot; empty: any), it is not a folder, and its folder exists and is writable. Throws a
+/// UsageError naming `option` ("-o", "--vg") and the path otherwise.
+void checkOutputPath(const std::string& path, const std::string& option, const std::vector<std::string>& extensions);
+
 /// An output path that is written to "<path>.partial" first and renamed into place by commit().
+/// The constructor checks the path (checkOutputPath, any extension).
 /// Pending outputs that are never committed are deleted by runTool on failure and on destruction.
 class PendingOutput {
  public:

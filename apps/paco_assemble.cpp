@@ -115,9 +115,7 @@ int run(int argc, char** argv) {
   }
   if (input.empty()) throw paco::app::UsageError("missing input file (PRIMITIVES)");
   if (output.empty()) throw paco::app::UsageError("missing output mesh (-o MESH)");
-  const std::string out_extension = paco::io::extensionOf(output);
-  if (out_extension != ".obj" && out_extension != ".off" && out_extension != ".ply")
-    throw paco::app::UsageError("output '" + output + "' must end in .obj, .off or .ply");
+  paco::app::checkOutputPath(output, "-o", {".obj", ".off", ".ply"});
 
   paco::PolygonalAssembler assembler;
   try {

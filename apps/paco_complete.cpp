@@ -99,11 +99,8 @@ int run(int argc, char** argv) {
   }
   if (o.input.empty()) throw paco::app::UsageError("expected an INPUT point cloud");
   if (o.output.empty()) throw paco::app::UsageError("expected -o PRIMITIVES.vg");
-  const std::string ext = paco::io::extensionOf(o.output);
-  if (ext != ".vg" && ext != ".bvg")
-    throw paco::app::UsageError("-o must name a .vg or .bvg file, got '" + o.output + "'");
-  if (!o.pcd.empty() && paco::io::extensionOf(o.pcd) != ".pcd")
-    throw paco::app::UsageError("--pcd must name a .pcd file, got '" + o.pcd + "'");
+  paco::app::checkOutputPath(o.output, "-o", {".vg", ".bvg"});
+  if (!o.pcd.empty()) paco::app::checkOutputPath(o.pcd, "--pcd", {".pcd"});
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
   paco::app::checkTurns(o.turns);

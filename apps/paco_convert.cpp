@@ -119,6 +119,7 @@ int run(int argc, char** argv) {
     return 0;
   }
   if (o.input.empty() || o.output.empty()) throw paco::app::UsageError("expected INPUT and OUTPUT files");
+  paco::app::checkOutputPath(o.output, "OUTPUT", {});
 
   const std::string in_ext = paco::io::extensionOf(o.input), out_ext = paco::io::extensionOf(o.output);
   bool mesh = isMeshOnly(in_ext) || isMeshOnly(out_ext);

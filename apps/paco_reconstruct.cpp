@@ -127,6 +127,9 @@ int run(int argc, char** argv) {
   o.fusion.validate();
   if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
   if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
+  paco::app::checkOutputPath(o.output, "-o", {".obj", ".off", ".ply", ".stl"});
+  paco::app::checkOutputPath(o.vg_output, "--vg", {".vg", ".bvg"});
+  paco::app::checkOutputPath(o.pcd_output, "--pcd", {".pcd"});
 
   // Check everything that can be checked before the slow work: names, model file, input file.
   auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>(o.segmenter);

@@ -137,10 +137,8 @@ int run(int argc, char** argv) {
   }
   if (o.input.empty()) throw paco::app::UsageError("expected an INPUT point cloud");
   if (o.output.empty()) throw paco::app::UsageError("expected -o LABELLED.pcd");
-  if (!o.vg.empty()) {
-    const std::string ext = paco::io::extensionOf(o.vg);
-    if (ext != ".vg" && ext != ".bvg") throw paco::app::UsageError("--vg must name a .vg or .bvg file, got '" + o.vg + "'");
-  }
+  paco::app::checkOutputPath(o.output, "-o", {".pcd", ".ply", ".xyz", ".npy", ".vg", ".bvg"});
+  if (!o.vg.empty()) paco::app::checkOutputPath(o.vg, "--vg", {".vg", ".bvg"});
   // Check every parameter before reading a large file.
   paco::app::validateNoiseAdaptation(o.noise_adaptation);
   paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;

@@ -404,6 +404,33 @@ TEST(PacoReconstruct, UnknownBackendNamesAreRejectedBeforeAnyWork) {
   EXPECT_EQ(filesIn(dir.path()), 0u);
 }
 
+// Output paths are checked before the input is read: a missing folder, a folder given as the
+// mesh, or a wrong extension is a usage error naming the option, and nothing is written.
+TEST(PacoReconstruct, OutputPathsAreCheckedBeforeAnyWork) {
+  TempDir dir;
+  const std::string run = tool() + " " + quoted(samplePath()) + " --no-completion -o ";
+  std::string log;
+  EXPECT_EQ(paco::test::runCommand(run + quoted(dir.file("missing/m.obj")), &log), 2) << log;
+  EXPECT_NE(log.find("-o '" + dir.file("missing/m.obj") + "': the folder '" + dir.file("missing") +
+                     "' does not exist; create it first"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("read '"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(run + quoted(dir.file("m.obj")) + " --pcd " + quoted(dir.file("missing/p.pcd")), &log),
+            2)
+      << log;
+  EXPECT_NE(log.find("--pcd '"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(run + quoted(dir.file("m.txt")), &log), 2) << log;
+  EXPECT_NE(log.find("-o must name a .obj, .off, .ply or .stl file"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(run + quoted(dir.file("m.obj")) + " --vg " + quoted(dir.file("m.txt")), &log), 2)
+      << log;
+  EXPECT_NE(log.find("--vg must name a .vg or .bvg file"), std::string::npos) << log;
+  std::filesystem::create_directory(dir.file("folder.obj"));
+  EXPECT_EQ(paco::test::runCommand(run + quoted(dir.file("folder.obj")), &log), 2) << log;
+  EXPECT_NE(log.find("is a folder; give a file name"), std::string::npos) << log;
+  EXPECT_EQ(filesIn(dir.path()), 1u);  // the folder made above, nothing else
+}
+
 #ifdef PACO_CHAIN_STAGES_EXAMPLE
 // The documentation's example chains the four classes by hand; it must keep working.
 TEST(ChainStagesExample, RunsOnTheSampleScan) {

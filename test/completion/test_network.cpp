@@ -25,7 +25,8 @@ void expectShapes(const NetworkOutput& out, const ModelConfig& c, int64_t B) {
   EXPECT_EQ(out.candidate_valid.sizes(), (std::vector<int64_t>{B, Q}));
   EXPECT_EQ(out.selected.sizes(), (std::vector<int64_t>{B, M}));
   EXPECT_EQ(out.selected.scalar_type(), torch::kLong);
-  for (const auto* t : {&out.normals, &out.offsets, &out.points, &out.logits})
+  EXPECT_EQ(out.global_feature.sizes(), (std::vector<int64_t>{B, c.global_width}));
+  for (const auto* t : {&out.normals, &out.offsets, &out.points, &out.logits, &out.global_feature})
     EXPECT_TRUE(torch::isfinite(*t).all().item<bool>());
   EXPECT_LT((out.normals.norm(2, -1) - 1).abs().max().item<float>(), 1e-5);
 }

@@ -175,6 +175,7 @@ NetworkOutput CompletionDecoderImpl::forward(const PlaneProxyOutput& in) {
   out.candidate_scores = scores;
   out.candidate_valid = candidate_valid;
   out.selected = selected;
+  out.global_feature = global;
   return out;
 }
 

@@ -28,6 +28,7 @@ struct NetworkOutput {
   torch::Tensor candidate_valid;    ///< (B,Q) bool: false for padded input slots (never kept;
                                     ///< exclude them from the ranking loss)
   torch::Tensor selected;           ///< (B,M) int64 indices of the kept candidates (top scores)
+  torch::Tensor global_feature;     ///< (B,W) max over the lifted proxies: what generates queries
 };
 
 /// Stage 3 on its own: plane proxies -> queries -> ranking -> decoder -> heads.
