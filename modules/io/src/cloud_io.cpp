@@ -264,7 +264,7 @@ void applyNonFinitePolicy(const std::string& path, LabelledCloud& cloud, NonFini
                    " have non-finite (NaN/Inf) coordinates or normals, the first is point " +
                    std::to_string(first_bad) + " (" + detail::numberText(p.x) + ", " + detail::numberText(p.y) +
                    ", " + detail::numberText(p.z) +
-                   "); drop them with NonFinitePolicy::Drop (paco_convert --drop-non-finite)");
+                   "); drop them with NonFinitePolicy::Drop (the tools' --drop-non-finite)");
   }
   std::size_t kept = 0;
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
