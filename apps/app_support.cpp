@@ -6,12 +6,11 @@
 #include <unistd.h>
 
 #include <algorithm>
-
 #include <cctype>
 #include <cerrno>
 #include <cmath>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <limits>

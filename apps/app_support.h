@@ -38,7 +38,8 @@ std::string shortNumber(double value);
 std::string noisyScanNote(double set, double used);
 
 /// --noise-adaptation M (PlanarSegmenter::setNoiseAdaptation) of paco_reconstruct, paco_complete,
-/// paco_eval and paco_segment (the default is the caller's), and its check: 0 (off) or a finite positive number, else a UsageError.
+/// paco_eval and paco_segment (the default is the caller's), and its check: 0 (off) or a finite
+/// positive number, else a UsageError.
 void addNoiseAdaptationOption(boost::program_options::options_description& options, double& multiple);
 void validateNoiseAdaptation(double multiple);
 
@@ -64,8 +65,9 @@ struct FusionFlags {
 };
 
 /// Checks an output path before any slow work: its extension is one of `extensions` (lower case
-/// with the dot; empty: any), it is not a folder, and its folder exists and is writable. Throws a
-/// UsageError naming `option` ("-o", "--vg") and the path otherwise.
+/// with the dot; empty: any), it is not a folder, and its folder exists and takes a new file (one
+/// is created and removed to tell). Throws a UsageError naming `option` ("-o", "--vg") and the
+/// path otherwise.
 void checkOutputPath(const std::string& path, const std::string& option, const std::vector<std::string>& extensions);
 
 /// An output path that is written to "<path>.partial" first and renamed into place by commit().
