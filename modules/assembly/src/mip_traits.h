@@ -175,8 +175,8 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     } else if (run.infeasible) {
       outcome.message = "CBC: the binary program is infeasible";
     } else if (outcome.hit_time_limit) {
-      outcome.message = "CBC found no feasible solution within the time limit of " +
-                        std::to_string(settings.seconds) + " s";
+      outcome.message = "CBC found no feasible solution in the " + std::to_string(settings.seconds) +
+                        " s left of the time limit; raise it or use the cell-complex backend";
     } else {
       outcome.message = "CBC stopped without a solution (status " + std::to_string(run.status) +
                         ", secondary status " + std::to_string(run.secondary_status) + ")";
@@ -317,8 +317,8 @@ class Glpk_timed_mixed_integer_program_traits : public CGAL::Mixed_integer_progr
       }
       ok = true;
     } else if (code == GLP_ETMLIM) {
-      outcome.message = "GLPK found no feasible solution within the time limit of " +
-                        std::to_string(settings.seconds) + " s (try --solver cbc)";
+      outcome.message = "GLPK found no feasible solution in the " + std::to_string(settings.seconds) +
+                        " s left of the time limit (try --solver cbc)";
     } else if (status == GLP_NOFEAS || code == GLP_ENOPFS) {
       outcome.message = "GLPK: the binary program is infeasible";
     } else {

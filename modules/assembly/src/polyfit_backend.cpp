@@ -184,8 +184,8 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   if (left <= 0.0) {
     outcome.status = AssemblyStatus::TimeLimit;
     outcome.message = "PolyFit candidate generation alone took " + std::to_string(secondsSince(start)) +
-                      " s, more than the time limit of " + std::to_string(options.seconds) +
-                      " s; raise it or use the cell-complex backend";
+                      " s, more than the " + std::to_string(options.seconds) +
+                      " s left of the time limit; raise it or use the cell-complex backend";
     return outcome;
   }
 

@@ -21,6 +21,8 @@ namespace paco {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// The share of the time left that PolyFit's warm start (the cell complex) may use.
+constexpr double kWarmStartBudgetShare = 0.5;
 
 double nowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -320,7 +322,9 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       cell_options.smoothness = smoothness_;
       cell_options.extent_margin = extent_margin_;
       cell_options.resolve_crossings = true;
-      cell_options.seconds = secondsLeft();
+      // At most half of the budget: the start is quick on piecewise-planar inputs, but on others
+      // the cell complex can relabel until its time runs out, and PolyFit needs time of its own.
+      cell_options.seconds = kWarmStartBudgetShare * secondsLeft();
       const detail::BackendOutcome start_outcome = detail::runCellComplex(refitted, cell_options, start_solid);
       if (start_outcome.status != AssemblyStatus::Success || !postProcess(start_solid).isClosedManifold())
         start_solid = SurfaceMesh{};
