@@ -1,12 +1,12 @@
 #include "app_support.h"
 
 #include <paco/common/error.h>
+#include <paco/io/cloud_io.h>
 
 #include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -136,8 +136,7 @@ std::string temporaryName(const std::string& final_path) {
 void checkOutputPath(const std::string& path, const std::string& option, const std::vector<std::string>& extensions) {
   namespace fs = std::filesystem;
   if (!extensions.empty()) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string ext = paco::io::extensionOf(path);
     if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {
       std::string list;
       for (std::size_t i = 0; i < extensions.size(); ++i)
@@ -147,11 +146,12 @@ void checkOutputPath(const std::string& path, const std::string& option, const s
   }
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw UsageError(option + " '" + path + "' is a folder; give a file name");
-  const fs::path folder = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+  const fs::path file(path);
+  const fs::path folder = file.parent_path().empty() ? fs::path(".") : file.parent_path();
   if (!fs::is_directory(folder, ec))
     throw UsageError(option + " '" + path + "': the folder '" + folder.string() + "' does not exist; create it first");
   // Create and remove a file there: permission bits alone miss read-only file systems, and root.
-  const fs::path probe = folder / ("." + fs::path(path).filename().string() + ".paco-write-check");
+  const fs::path probe = folder / ("." + file.filename().string() + ".paco-write-check");
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
   if (fd < 0 && errno != EEXIST)
     throw UsageError(option + " '" + path + "': cannot create files in the folder '" + folder.string() +
