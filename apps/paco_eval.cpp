@@ -145,10 +145,11 @@ int single(const Options& o) {
   const ev::MeshMetrics m = o.input.empty() ? ev::evaluateMesh(pred, gt, options) : ev::evaluateMesh(pred, gt, seen, options);
   timer.stop();
   const ev::FailureReason reason = ev::classifyMesh(pred);
-  std::printf("CD=%.4f (pred->GT %.4f, GT->pred %.4f) HD=%.4f (pred->GT %.4f, GT->pred %.4f) NC=%.4f #f=%zu #v=%zu "
-              "closed=%s",
+  std::printf("CD=%.4f (pred->GT %.4f, GT->pred %.4f) HD=%.4f (pred->GT %.4f, GT->pred %.4f) NC=%.4f (pred->GT "
+              "%.4f, GT->pred %.4f) #f=%zu #v=%zu closed=%s",
               m.chamfer, m.chamfer_pred_to_gt, m.chamfer_gt_to_pred, m.hausdorff, m.hausdorff_pred_to_gt,
-              m.hausdorff_gt_to_pred, m.normal_consistency, m.num_faces, m.num_vertices, m.closed ? "yes" : "no");
+              m.hausdorff_gt_to_pred, m.normal_consistency, m.normal_consistency_pred_to_gt,
+              m.normal_consistency_gt_to_pred, m.num_faces, m.num_vertices, m.closed ? "yes" : "no");
   if (!std::isnan(m.volume_ratio)) std::printf(" volume_ratio=%.4f", m.volume_ratio);
   std::printf("\n");
   if (!o.input.empty()) {
@@ -159,9 +160,10 @@ int single(const Options& o) {
       return std::isnan(v) ? std::string("none") : std::string(text);
     };
     std::printf("GT->pred over the seen GT surface %s, over the hidden %s (%.1f %% of the GT surface is farther "
-                "than %.3g from every input point)\n",
+                "than %.3g from every input point); its NC over the seen %s, over the hidden %s\n",
                 value(m.chamfer_gt_to_pred_seen).c_str(), value(m.chamfer_gt_to_pred_hidden).c_str(),
-                100.0 * m.hidden_fraction, options.seen_radius);
+                100.0 * m.hidden_fraction, options.seen_radius, value(m.normal_consistency_gt_to_pred_seen).c_str(),
+                value(m.normal_consistency_gt_to_pred_hidden).c_str());
   }
   if (reason != ev::FailureReason::None) {
     const ev::MeshMetrics f = ev::evaluateFailure(gt, options, failureBoxFromName(o.failure_box));

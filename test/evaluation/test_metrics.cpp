@@ -179,6 +179,33 @@ TEST(Metrics, GtToPredSplitsIntoTheSeenAndTheHiddenSurface) {
   EXPECT_EQ(plain.hausdorff, m.hausdorff);
 }
 
+TEST(Metrics, NormalConsistencyOfTheGtSplitsIntoTheSeenAndTheHiddenSurface) {
+  // GT: the unit cube seen from above, as above (seen radius r = 0.03 sqrt(3) in its units).
+  // Prediction: a wide slab [-1,2]^2 x [0.5,1]. Every GT sample's nearest predicted sample is on
+  // the slab's top or bottom face (the slab's sides are 1 away), so the GT's top and bottom faces
+  // agree (1) and its side faces are perpendicular (0). Seen: the top face (area 1) and a band r
+  // high on each side face: 1 / (1 + 4r). Hidden: the bottom face and the rest of the sides:
+  // 1 / (5 - 4r). Only edge samples differ, by the sampling gap.
+  const paco::SurfaceMesh gt = makeBox({0, 0, 0}, {1, 1, 1});
+  const paco::SurfaceMesh slab = makeBox({-1, -1, 0.5}, {2, 2, 1});
+  ev::MetricOptions options;
+  options.num_samples = 50000;
+  const ev::MeshMetrics m = ev::evaluateMesh(slab, gt, topFaceGrid(0.005), options);
+  const double r = 0.03 * std::sqrt(3.0);
+  EXPECT_NEAR(m.normal_consistency_gt_to_pred_seen, 1.0 / (1.0 + 4.0 * r), 0.02);
+  EXPECT_NEAR(m.normal_consistency_gt_to_pred_hidden, 1.0 / (5.0 - 4.0 * r), 0.01);
+  EXPECT_NEAR(m.normal_consistency_gt_to_pred, 2.0 / 6.0, 0.01);
+  // The parts make up the GT->pred direction by their shares; NC is the mean of the directions.
+  EXPECT_NEAR((1.0 - m.hidden_fraction) * m.normal_consistency_gt_to_pred_seen +
+                  m.hidden_fraction * m.normal_consistency_gt_to_pred_hidden,
+              m.normal_consistency_gt_to_pred, 1e-9);
+  EXPECT_NEAR(0.5 * (m.normal_consistency_pred_to_gt + m.normal_consistency_gt_to_pred), m.normal_consistency, 1e-12);
+  const ev::MeshMetrics plain = ev::evaluateMesh(slab, gt, options);
+  EXPECT_TRUE(std::isnan(plain.normal_consistency_gt_to_pred_seen));
+  EXPECT_TRUE(std::isnan(plain.normal_consistency_gt_to_pred_hidden));
+  EXPECT_EQ(plain.normal_consistency_gt_to_pred, m.normal_consistency_gt_to_pred);
+}
+
 TEST(Metrics, NoSeenPointsHideEverythingAndAFullScanHidesNothing) {
   const paco::SurfaceMesh gt = makeBox({0, 0, 0}, {1, 1, 1});
   const paco::SurfaceMesh top_half = makeBox({0, 0, 0.5}, {1, 1, 1});

@@ -83,6 +83,10 @@ TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
   a.hidden_fraction = 0.75;
   a.chamfer_gt_to_pred_seen = 0.5;
   a.chamfer_gt_to_pred_hidden = 4.5;
+  a.nc_pred_to_gt = 0.8;
+  a.nc_gt_to_pred = 0.706;
+  a.nc_gt_to_pred_seen = 0.95;
+  a.nc_gt_to_pred_hidden = 0.625;
   const ev::EvaluationRecord b = record("oracle", "p2", 0, ev::FailureReason::None, 1.61, 3.45, 0.957);
   {
     std::ofstream out(path);
@@ -103,6 +107,10 @@ TEST(Csv, RoundTripsAndDropsALineCutByAnInterruption) {
   EXPECT_DOUBLE_EQ(records[0].hidden_fraction, 0.75);
   EXPECT_DOUBLE_EQ(records[0].chamfer_gt_to_pred_seen, 0.5);
   EXPECT_DOUBLE_EQ(records[0].chamfer_gt_to_pred_hidden, 4.5);
+  EXPECT_DOUBLE_EQ(records[0].nc_pred_to_gt, 0.8);
+  EXPECT_DOUBLE_EQ(records[0].nc_gt_to_pred, 0.706);
+  EXPECT_DOUBLE_EQ(records[0].nc_gt_to_pred_seen, 0.95);
+  EXPECT_DOUBLE_EQ(records[0].nc_gt_to_pred_hidden, 0.625);
   EXPECT_DOUBLE_EQ(records[0].nc_prim, 0.9);
   EXPECT_EQ(records[0].unmatched_predicted, 2);
   EXPECT_EQ(records[0].message, a.message);
@@ -152,12 +160,22 @@ TEST(Summary, SeenAndHiddenMeansSkipTheCasesWithoutThem) {
   rs[0].chamfer_gt_to_pred_hidden = 1.5;
   rs[1].hidden_fraction = 1.0;  // all hidden: no seen value
   rs[1].chamfer_gt_to_pred_hidden = 2.5;
+  rs[0].nc_gt_to_pred_seen = 0.95;
+  rs[0].nc_gt_to_pred_hidden = 0.75;
+  rs[1].nc_gt_to_pred_hidden = 0.5;
+  for (auto& r : rs) {
+    r.nc_pred_to_gt = r.normal_consistency + 0.02;
+    r.nc_gt_to_pred = r.normal_consistency - 0.02;
+  }
   const ev::Summary s = ev::summarize(rs);  // rs[2] measured nothing
   EXPECT_DOUBLE_EQ(s.hidden_fraction, 0.8);
   EXPECT_DOUBLE_EQ(s.chamfer_gt_to_pred_seen, 0.5);
   EXPECT_DOUBLE_EQ(s.chamfer_gt_to_pred_hidden, 2.0);
+  EXPECT_DOUBLE_EQ(s.nc_gt_to_pred_seen, 0.95);
+  EXPECT_DOUBLE_EQ(s.nc_gt_to_pred_hidden, 0.625);
   const std::string md = ev::markdownReport(rs);
   EXPECT_NE(md.find("| 1.60 / 2.40 | 0.50 / 2.00 (80) | 7.00 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 0.853 / 0.813 (0.950 / 0.625) |"), std::string::npos) << md;
 }
 
 TEST(Markdown, OneTablePerLevelAndOverall) {

@@ -34,9 +34,9 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr toCloud(const std::vector<Eigen::Vector3d>& 
 
 // For every point of `from`, its nearest neighbour in `to` (the kd-tree of `to`). Distances are
 // recomputed in double from the original coordinates: the tree only picks the neighbour. Each
-// point's distance goes to `distances` when given.
+// point's distance and normal agreement go to `distances` and `agreements` when given.
 Directed directed(const SurfaceSample& from, const SurfaceSample& to, const pcl::KdTreeFLANN<pcl::PointXYZ>& tree,
-                  std::vector<double>* distances = nullptr) {
+                  std::vector<double>* distances = nullptr, std::vector<double>* agreements = nullptr) {
   Directed result;
   std::vector<int> index(1);
   std::vector<float> squared(1);
@@ -51,7 +51,9 @@ Directed directed(const SurfaceSample& from, const SurfaceSample& to, const pcl:
     if (distances) distances->push_back(distance);
     sum_distance += distance;
     result.max_distance = std::max(result.max_distance, distance);
-    sum_agreement += std::abs(from.normals[i].dot(to.normals[j]));
+    const double agreement = std::abs(from.normals[i].dot(to.normals[j]));
+    if (agreements) agreements->push_back(agreement);
+    sum_agreement += agreement;
   }
   const double n = static_cast<double>(from.points.size());
   result.mean_distance = sum_distance / n;
@@ -76,16 +78,17 @@ SurfaceMesh boxMesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   return box;
 }
 
-// compareSamples, and each reference point's distance to the prediction when asked.
+// compareSamples, and each reference point's distance to the prediction and normal agreement
+// with it when asked.
 SurfaceDistances compare(const SurfaceSample& predicted, const SurfaceSample& reference,
-                         std::vector<double>* reference_distances) {
+                         std::vector<double>* reference_distances, std::vector<double>* reference_agreements) {
   checkSample(predicted, "predicted");
   checkSample(reference, "reference");
   pcl::KdTreeFLANN<pcl::PointXYZ> predicted_tree, reference_tree;
   predicted_tree.setInputCloud(toCloud(predicted.points));
   reference_tree.setInputCloud(toCloud(reference.points));
   const Directed forward = directed(predicted, reference, reference_tree);
-  const Directed backward = directed(reference, predicted, predicted_tree, reference_distances);
+  const Directed backward = directed(reference, predicted, predicted_tree, reference_distances, reference_agreements);
   SurfaceDistances d;
   d.chamfer_pred_to_gt = forward.mean_distance;
   d.chamfer_gt_to_pred = backward.mean_distance;
@@ -93,6 +96,8 @@ SurfaceDistances compare(const SurfaceSample& predicted, const SurfaceSample& re
   d.hausdorff = std::max(forward.max_distance, backward.max_distance);
   d.hausdorff_pred_to_gt = forward.max_distance;
   d.hausdorff_gt_to_pred = backward.max_distance;
+  d.normal_consistency_pred_to_gt = forward.mean_normal_agreement;
+  d.normal_consistency_gt_to_pred = backward.mean_normal_agreement;
   d.normal_consistency = 0.5 * (forward.mean_normal_agreement + backward.mean_normal_agreement);
   return d;
 }
@@ -144,8 +149,9 @@ MeshMetrics measure(const SurfaceMesh& predicted, const SurfaceMesh& reference, 
   }
   const SurfaceSample pred_sample = sampleSurface(pred, options.num_samples, options.prediction_seed);
   const SurfaceSample ref_sample = sampleSurface(ref, options.num_samples, options.reference_seed);
-  std::vector<double> ref_distances;
-  const SurfaceDistances d = compare(pred_sample, ref_sample, seen ? &ref_distances : nullptr);
+  std::vector<double> ref_distances, ref_agreements;
+  const SurfaceDistances d =
+      compare(pred_sample, ref_sample, seen ? &ref_distances : nullptr, seen ? &ref_agreements : nullptr);
 
   MeshMetrics m;
   m.chamfer = d.chamfer * options.distance_scale;
@@ -155,6 +161,8 @@ MeshMetrics measure(const SurfaceMesh& predicted, const SurfaceMesh& reference, 
   m.hausdorff_pred_to_gt = d.hausdorff_pred_to_gt * options.distance_scale;
   m.hausdorff_gt_to_pred = d.hausdorff_gt_to_pred * options.distance_scale;
   m.normal_consistency = d.normal_consistency;
+  m.normal_consistency_pred_to_gt = d.normal_consistency_pred_to_gt;
+  m.normal_consistency_gt_to_pred = d.normal_consistency_gt_to_pred;
   m.num_faces = predicted.faces.size();
   m.num_vertices = predicted.vertices.size();
   m.closed = analyseTopology(predicted).isClosedManifold();
@@ -163,20 +171,28 @@ MeshMetrics measure(const SurfaceMesh& predicted, const SurfaceMesh& reference, 
   if (m.closed && ref_volume != 0.0) m.volume_ratio = signedVolume(predicted) / ref_volume;
   if (seen) {
     const std::vector<bool> is_seen = seenSamples(ref_sample, seen_points, options.seen_radius);
-    double sum_seen = 0.0, sum_hidden = 0.0;
+    double sum_seen = 0.0, sum_hidden = 0.0, agreement_seen = 0.0, agreement_hidden = 0.0;
     std::size_t num_seen = 0;
     for (std::size_t i = 0; i < is_seen.size(); ++i) {
       if (is_seen[i]) {
         sum_seen += ref_distances[i];
+        agreement_seen += ref_agreements[i];
         ++num_seen;
       } else {
         sum_hidden += ref_distances[i];
+        agreement_hidden += ref_agreements[i];
       }
     }
     const std::size_t num_hidden = is_seen.size() - num_seen;
     m.hidden_fraction = static_cast<double>(num_hidden) / static_cast<double>(is_seen.size());
-    if (num_seen) m.chamfer_gt_to_pred_seen = sum_seen / static_cast<double>(num_seen) * options.distance_scale;
-    if (num_hidden) m.chamfer_gt_to_pred_hidden = sum_hidden / static_cast<double>(num_hidden) * options.distance_scale;
+    if (num_seen) {
+      m.chamfer_gt_to_pred_seen = sum_seen / static_cast<double>(num_seen) * options.distance_scale;
+      m.normal_consistency_gt_to_pred_seen = agreement_seen / static_cast<double>(num_seen);
+    }
+    if (num_hidden) {
+      m.chamfer_gt_to_pred_hidden = sum_hidden / static_cast<double>(num_hidden) * options.distance_scale;
+      m.normal_consistency_gt_to_pred_hidden = agreement_hidden / static_cast<double>(num_hidden);
+    }
   }
   return m;
 }
@@ -184,7 +200,7 @@ MeshMetrics measure(const SurfaceMesh& predicted, const SurfaceMesh& reference, 
 }  // namespace
 
 SurfaceDistances compareSamples(const SurfaceSample& predicted, const SurfaceSample& reference) {
-  return compare(predicted, reference, nullptr);
+  return compare(predicted, reference, nullptr, nullptr);
 }
 
 MeshMetrics evaluateMesh(const SurfaceMesh& predicted, const SurfaceMesh& reference, const MetricOptions& options) {

@@ -76,7 +76,8 @@ double parseNumber(const std::string& text) {
 const char* kFixedColumns[] = {"method", "assembler", "part", "level", "view", "status", "reason",
                                "cd", "hd", "nc", "nc_prim", "unmatched_pred", "faces", "vertices",
                                "closed", "volume_ratio", "cd_pred_to_gt", "cd_gt_to_pred",
-                               "hidden_fraction", "cd_gt_to_pred_seen", "cd_gt_to_pred_hidden"};
+                               "hidden_fraction", "cd_gt_to_pred_seen", "cd_gt_to_pred_hidden", "nc_pred_to_gt",
+                               "nc_gt_to_pred", "nc_gt_to_pred_seen", "nc_gt_to_pred_hidden"};
 constexpr std::size_t kNumFixed = sizeof(kFixedColumns) / sizeof(kFixedColumns[0]);
 
 double mean(const std::vector<double>& v) {
@@ -150,6 +151,14 @@ std::string seenHidden(const Summary& s) {
          cell(100.0 * s.hidden_fraction, 0) + ")";
 }
 
+// NC's "pred→GT / GT→pred (GT→pred seen / hidden)", the split when measured.
+std::string ncHalves(const Summary& s) {
+  std::string text = cell(s.nc_pred_to_gt, 3) + " / " + cell(s.nc_gt_to_pred, 3);
+  if (s.hidden_fraction >= 0.0)
+    text += " (" + cell(s.nc_gt_to_pred_seen, 3) + " / " + cell(s.nc_gt_to_pred_hidden, 3) + ")";
+  return text;
+}
+
 std::string table(const std::vector<EvaluationRecord>& records) {
   // Rows in order of first appearance of (method, assembler); sanity last. "total" has its own column.
   Rows rows = groupRows(records, /*with_sanity=*/true, "total");
@@ -159,10 +168,10 @@ std::string table(const std::vector<EvaluationRecord>& records) {
   std::stable_partition(order.begin(), order.end(), [](const auto& k) { return k.first != "sanity"; });
 
   std::ostringstream md;
-  md << "| Method | Assembler | N | FR % | CD | CD pred→GT / GT→pred | GT→pred seen / hidden (hidden %) | HD | NC | NC_prim | unmatched pred | CD closed | HD closed | "
+  md << "| Method | Assembler | N | FR % | CD | CD pred→GT / GT→pred | GT→pred seen / hidden (hidden %) | HD | NC | NC pred→GT / GT→pred (seen / hidden) | NC_prim | unmatched pred | CD closed | HD closed | "
         "vol. ratio (median) | #f | #v | failures by reason |";
   for (const auto& s : stages) md << " t " << s << " (s) |";
-  md << " t total (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+  md << " t total (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
   for (std::size_t i = 0; i < stages.size(); ++i) md << "---|";
   md << "---|\n";
   for (const auto& k : order) {
@@ -176,7 +185,7 @@ std::string table(const std::vector<EvaluationRecord>& records) {
     md << "| " << k.first << " | " << k.second << " | " << s.count << " | " << cell(s.failureRate(), 1) << " | "
        << cell(s.chamfer, 2) << " | " << cell(s.chamfer_pred_to_gt, 2) << " / " << cell(s.chamfer_gt_to_pred, 2)
        << " | " << seenHidden(s) << " | " << cell(s.hausdorff, 2) << " | " << cell(s.normal_consistency, 3) << " | "
-       << cell(s.nc_prim, 3) << " | " << cell(s.unmatched_predicted, 1) << " | " << cell(s.closed_chamfer, 2) << " | "
+       << ncHalves(s) << " | " << cell(s.nc_prim, 3) << " | " << cell(s.unmatched_predicted, 1) << " | " << cell(s.closed_chamfer, 2) << " | "
        << cell(s.closed_hausdorff, 2) << " | " << cell(s.volume_ratio_median, 3) << " | "
        << (s.failures < s.count ? cell(s.faces, 1) : "–") << " | "
        << (s.failures < s.count ? cell(s.vertices, 1) : "–") << " | " << reasons << " |";
@@ -259,6 +268,10 @@ void EvaluationRecord::setScores(const MeshMetrics& metrics) {
   chamfer_gt_to_pred_hidden = metrics.chamfer_gt_to_pred_hidden;
   hausdorff = metrics.hausdorff;
   normal_consistency = metrics.normal_consistency;
+  nc_pred_to_gt = metrics.normal_consistency_pred_to_gt;
+  nc_gt_to_pred = metrics.normal_consistency_gt_to_pred;
+  nc_gt_to_pred_seen = metrics.normal_consistency_gt_to_pred_seen;
+  nc_gt_to_pred_hidden = metrics.normal_consistency_gt_to_pred_hidden;
 }
 
 const std::vector<std::string>& stageNames() {
@@ -283,7 +296,9 @@ void appendRecord(std::ostream& out, const EvaluationRecord& r) {
       << ',' << r.num_vertices << ',' << (r.failed() ? 0 : 1) << ',' << formatNumber(r.volume_ratio, 9) << ','
       << formatNumber(r.chamfer_pred_to_gt, 9) << ',' << formatNumber(r.chamfer_gt_to_pred, 9) << ','
       << formatNumber(r.hidden_fraction, 9) << ',' << formatNumber(r.chamfer_gt_to_pred_seen, 9) << ','
-      << formatNumber(r.chamfer_gt_to_pred_hidden, 9);
+      << formatNumber(r.chamfer_gt_to_pred_hidden, 9) << ',' << formatNumber(r.nc_pred_to_gt, 9) << ','
+      << formatNumber(r.nc_gt_to_pred, 9) << ',' << formatNumber(r.nc_gt_to_pred_seen, 9) << ','
+      << formatNumber(r.nc_gt_to_pred_hidden, 9);
   for (const auto& s : stageNames()) {
     auto it = r.seconds.find(s);
     out << ',' << (it == r.seconds.end() ? std::string() : formatNumber(it->second, 6));
@@ -340,6 +355,10 @@ std::vector<EvaluationRecord> readRecords(const std::string& path, std::size_t* 
       r.hidden_fraction = parseNumber(f[18]);
       r.chamfer_gt_to_pred_seen = parseNumber(f[19]);
       r.chamfer_gt_to_pred_hidden = parseNumber(f[20]);
+      r.nc_pred_to_gt = parseNumber(f[21]);
+      r.nc_gt_to_pred = parseNumber(f[22]);
+      r.nc_gt_to_pred_seen = parseNumber(f[23]);
+      r.nc_gt_to_pred_hidden = parseNumber(f[24]);
       for (std::size_t i = 0; i < stageNames().size(); ++i)
         if (!f[kNumFixed + i].empty()) r.seconds[stageNames()[i]] = parseNumber(f[kNumFixed + i]);
       r.message = f.back();
@@ -355,7 +374,7 @@ Summary summarize(const std::vector<EvaluationRecord>& records) {
   Summary s;
   s.count = records.size();
   std::vector<double> cd, cd_pred_to_gt, cd_gt_to_pred, hd, nc, prim, unmatched, ccd, chd, faces, vertices, volume;
-  std::vector<double> hidden, gt_to_pred_seen, gt_to_pred_hidden;
+  std::vector<double> hidden, gt_to_pred_seen, gt_to_pred_hidden, nc_pred_to_gt, nc_gt_to_pred, nc_seen, nc_hidden;
   std::map<std::string, std::vector<double>> times;
   for (const auto& r : records) {
     cd.push_back(r.chamfer);
@@ -366,6 +385,10 @@ Summary summarize(const std::vector<EvaluationRecord>& records) {
     if (!std::isnan(r.chamfer_gt_to_pred_hidden)) gt_to_pred_hidden.push_back(r.chamfer_gt_to_pred_hidden);
     hd.push_back(r.hausdorff);
     nc.push_back(r.normal_consistency);
+    if (!std::isnan(r.nc_pred_to_gt)) nc_pred_to_gt.push_back(r.nc_pred_to_gt);
+    if (!std::isnan(r.nc_gt_to_pred)) nc_gt_to_pred.push_back(r.nc_gt_to_pred);
+    if (!std::isnan(r.nc_gt_to_pred_seen)) nc_seen.push_back(r.nc_gt_to_pred_seen);
+    if (!std::isnan(r.nc_gt_to_pred_hidden)) nc_hidden.push_back(r.nc_gt_to_pred_hidden);
     if (r.nc_prim >= 0) prim.push_back(r.nc_prim);
     if (r.unmatched_predicted >= 0) unmatched.push_back(r.unmatched_predicted);
     for (const auto& [stage, t] : r.seconds) times[stage].push_back(t);
@@ -389,6 +412,10 @@ Summary summarize(const std::vector<EvaluationRecord>& records) {
   s.chamfer_gt_to_pred_hidden = orMinus(mean(gt_to_pred_hidden));
   s.hausdorff = orMinus(mean(hd));
   s.normal_consistency = orMinus(mean(nc));
+  s.nc_pred_to_gt = orMinus(mean(nc_pred_to_gt));
+  s.nc_gt_to_pred = orMinus(mean(nc_gt_to_pred));
+  s.nc_gt_to_pred_seen = orMinus(mean(nc_seen));
+  s.nc_gt_to_pred_hidden = orMinus(mean(nc_hidden));
   s.nc_prim = orMinus(mean(prim));
   s.unmatched_predicted = orMinus(mean(unmatched));
   s.closed_chamfer = orMinus(mean(ccd));

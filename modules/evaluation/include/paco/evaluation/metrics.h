@@ -46,6 +46,9 @@ struct SurfaceDistances {
   double hausdorff = 0.0;           ///< max of the two directed Hausdorff distances
   double hausdorff_pred_to_gt = 0.0, hausdorff_gt_to_pred = 0.0;  ///< the directed Hausdorff distances
   double normal_consistency = 1.0;  ///< mean |n_pred . n_gt| at nearest neighbours, both directions averaged
+  /// The two directions of NC: the prediction's samples against their nearest GT sample (a
+  /// stray or tilted face) and the GT's against their nearest predicted sample (a missed one).
+  double normal_consistency_pred_to_gt = 1.0, normal_consistency_gt_to_pred = 1.0;
 };
 
 /// Nearest neighbours come from a kd-tree (FLANN through pcl::KdTreeFLANN). Throws
@@ -63,6 +66,8 @@ struct MeshMetrics {
   /// stray face (pred->GT) from a missed feature (GT->pred).
   double hausdorff_pred_to_gt = 0.0, hausdorff_gt_to_pred = 0.0;
   double normal_consistency = 0.0;  ///< NC in [0, 1]
+  /// The two directions NC averages (see SurfaceDistances).
+  double normal_consistency_pred_to_gt = 0.0, normal_consistency_gt_to_pred = 0.0;
   std::size_t num_faces = 0;        ///< polygon faces of the prediction (#f)
   std::size_t num_vertices = 0;     ///< vertices of the prediction (#v)
   bool closed = false;              ///< the prediction is closed, manifold and consistently oriented
@@ -73,10 +78,12 @@ struct MeshMetrics {
   /// point), and GT->pred (x distance_scale) over the seen and over the hidden GT surface:
   /// chamfer_gt_to_pred = (1 - hidden_fraction) * ..._seen + hidden_fraction * ..._hidden. The
   /// hidden half is what completion has to recover; a part of the GT that is all seen or all
-  /// hidden has NaN for the empty half.
+  /// hidden has NaN for the empty half. NC's GT->pred direction is split the same way.
   double hidden_fraction = std::numeric_limits<double>::quiet_NaN();
   double chamfer_gt_to_pred_seen = std::numeric_limits<double>::quiet_NaN();
   double chamfer_gt_to_pred_hidden = std::numeric_limits<double>::quiet_NaN();
+  double normal_consistency_gt_to_pred_seen = std::numeric_limits<double>::quiet_NaN();
+  double normal_consistency_gt_to_pred_hidden = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// CD, HD, NC, #f, #v, closedness and volume ratio of `predicted` against `reference` (the GT).

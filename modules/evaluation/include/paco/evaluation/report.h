@@ -51,6 +51,7 @@ struct EvaluationRecord {
   double chamfer_gt_to_pred = 0.0;  ///< CD's half from the GT to the prediction, x 100
   double hausdorff = 0.0;      ///< HD x 100
   double normal_consistency = 0.0;  ///< NC
+  double nc_pred_to_gt = 0.0, nc_gt_to_pred = 0.0;  ///< NC's two directions (MeshMetrics)
   double nc_prim = -1.0;       ///< NC_prim of the primitives given to the assembler; < 0: not applicable
   int unmatched_predicted = -1;///< predicted planes without a GT partner; < 0: not applicable
   std::size_t num_faces = 0;   ///< #f (0 when failed)
@@ -61,12 +62,16 @@ struct EvaluationRecord {
   double hidden_fraction = std::numeric_limits<double>::quiet_NaN();
   double chamfer_gt_to_pred_seen = std::numeric_limits<double>::quiet_NaN();
   double chamfer_gt_to_pred_hidden = std::numeric_limits<double>::quiet_NaN();
+  /// NC's GT->pred direction over the seen and the hidden GT surface. NaN when not measured or empty.
+  double nc_gt_to_pred_seen = std::numeric_limits<double>::quiet_NaN();
+  double nc_gt_to_pred_hidden = std::numeric_limits<double>::quiet_NaN();
   /// Wall time per stage in seconds, e.g. {"segment", 0.12}, {"assemble", 0.8}; "total" is added.
   std::map<std::string, double> seconds;
   std::string message;         ///< why it failed, or empty
 
   bool failed() const { return reason != FailureReason::None; }
-  /// Takes CD (and its halves, and GT->pred's seen and hidden parts), HD and NC from `metrics`.
+  /// Takes CD (and its halves, and GT->pred's seen and hidden parts), HD and NC (and its halves,
+  /// and its GT->pred seen and hidden parts) from `metrics`.
   void setScores(const MeshMetrics& metrics);
   /// The resume key: method|assembler|part|level|view.
   std::string key() const;
@@ -93,6 +98,8 @@ struct Summary {
   /// Means over the cases that measured them (< 0: none): the hidden share of the GT surface and
   /// GT->pred over the seen and the hidden GT surface.
   double hidden_fraction = -1.0, chamfer_gt_to_pred_seen = -1.0, chamfer_gt_to_pred_hidden = -1.0;
+  double nc_pred_to_gt = -1.0, nc_gt_to_pred = -1.0;  ///< means over all cases
+  double nc_gt_to_pred_seen = -1.0, nc_gt_to_pred_hidden = -1.0;  ///< as chamfer_gt_to_pred_seen
   double nc_prim = -1.0;             ///< mean over the cases where it applies; < 0: none
   double unmatched_predicted = -1.0; ///< mean; < 0: not applicable
   double closed_chamfer = -1.0, closed_hausdorff = -1.0;  ///< means over the succeeded cases; < 0: none
