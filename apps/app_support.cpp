@@ -88,11 +88,12 @@ std::string shortNumber(double value) {
 }
 
 FusionFlags::FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing,
-                         double unseen_point_fraction)
+                         double unseen_point_fraction, double contradiction_radius)
     : align_unseen_degrees(align_unseen_degrees),
       clip_margin(std::isinf(clip_margin) ? "off" : shortNumber(clip_margin)),
       fill_box_spacing(fill_box_spacing),
-      unseen_point_fraction(unseen_point_fraction) {}
+      unseen_point_fraction(unseen_point_fraction),
+      contradiction_radius(contradiction_radius) {}
 
 void FusionFlags::addTo(boost::program_options::options_description& options) {
   namespace po = boost::program_options;
@@ -104,7 +105,10 @@ void FusionFlags::addTo(boost::program_options::options_description& options) {
       ("fill-box", po::value(&fill_box_spacing)->default_value(fill_box_spacing, shortNumber(fill_box_spacing)),
        "with fusion: cover the uncovered faces of the box of the seen points with points this far apart (fraction of its diagonal; 0: off)")
       ("unseen-points", po::value(&unseen_point_fraction)->default_value(unseen_point_fraction, shortNumber(unseen_point_fraction)),
-       "with fusion: the fraction of the network's points that unseen primitives keep, in (0, 1] (1: all)");
+       "with fusion: the fraction of the network's points that unseen primitives keep, in (0, 1] (1: all)")
+      ("contradiction-radius", po::value(&contradiction_radius)->default_value(contradiction_radius, shortNumber(contradiction_radius)),
+       "with fusion: drop the network's points of a seen face where the scan, within this fraction of the diagonal, "
+       "saw no such face or shows solid (0: off)");
 }
 
 void FusionFlags::validate() const {
@@ -117,6 +121,9 @@ void FusionFlags::validate() const {
   if (!(unseen_point_fraction > 0.0 && unseen_point_fraction <= 1.0))
     throw UsageError("--unseen-points must be in (0, 1] (a fraction of the points), got " +
                      std::to_string(unseen_point_fraction));
+  if (!(contradiction_radius >= 0.0 && contradiction_radius < 1.0))
+    throw UsageError("--contradiction-radius must be 0 (off) or in (0, 1) (a fraction of the diagonal), got " +
+                     std::to_string(contradiction_radius));
   parseNonNegativeOrOff("--clip-margin", clip_margin);
 }
 

@@ -49,14 +49,17 @@ void validateNoiseAdaptation(double multiple);
 /// paco::evaluation::MethodOptions in paco_eval, which can be built without the completion
 /// module), so that they are written once.
 struct FusionFlags {
-  FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing, double unseen_point_fraction);
+  FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing, double unseen_point_fraction,
+              double contradiction_radius);
 
   double align_unseen_degrees;
   std::string clip_margin;  ///< a number, or "off" (infinity)
   double fill_box_spacing;
   double unseen_point_fraction;
+  double contradiction_radius;
 
-  /// Adds --align-unseen, --clip-margin, --fill-box and --unseen-points, bound to the fields above.
+  /// Adds --align-unseen, --clip-margin, --fill-box, --unseen-points and --contradiction-radius,
+  /// bound to the fields above.
   void addTo(boost::program_options::options_description& options);
   /// Throws UsageError when a value is out of range.
   void validate() const;

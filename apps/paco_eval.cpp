@@ -30,7 +30,8 @@ namespace {
 const char kTool[] = "paco_eval";
 
 paco::app::FusionFlags fusionFlagsOf(const ev::MethodOptions& method) {
-  return {method.align_unseen_degrees, method.clip_margin, method.fill_box_spacing, method.unseen_point_fraction};
+  return {method.align_unseen_degrees, method.clip_margin, method.fill_box_spacing, method.unseen_point_fraction,
+          method.contradiction_radius};
 }
 
 struct Options {
@@ -219,6 +220,7 @@ int dataset(const Options& o) {
   b.method.clip_margin = o.fusion.clipMargin();
   b.method.fill_box_spacing = o.fusion.fill_box_spacing;
   b.method.unseen_point_fraction = o.fusion.unseen_point_fraction;
+  b.method.contradiction_radius = o.fusion.contradiction_radius;
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
   b.method.known_extent_oracle = o.known_extent_oracle;

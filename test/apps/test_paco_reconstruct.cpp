@@ -374,6 +374,9 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--fill-box must be 0 (off) or in [0.001, 1)"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --unseen-points 0", &log), 2) << log;
   EXPECT_NE(log.find("--unseen-points must be in (0, 1]"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --contradiction-radius 1", &log), 2)
+      << log;
+  EXPECT_NE(log.find("--contradiction-radius must be 0 (off) or in (0, 1)"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --max-points 100", &log), 2) << log;
   EXPECT_NE(log.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-points 2", &log), 2) << log;
@@ -390,6 +393,7 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--no-completion"), std::string::npos);
   EXPECT_NE(log.find("--fill-box"), std::string::npos);
   EXPECT_NE(log.find("--unseen-points"), std::string::npos);
+  EXPECT_NE(log.find("--contradiction-radius"), std::string::npos);
 }
 
 TEST(PacoReconstruct, UnknownBackendNamesAreRejectedBeforeAnyWork) {

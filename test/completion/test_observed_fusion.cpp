@@ -29,12 +29,13 @@ PlanarPrimitive patch(const Plane& plane, const Eigen::Vector3d& centre, double 
   return primitive;
 }
 
-// Fusion alone, without the box fill and the thinning of unseen primitives (which these tests
-// of matching would otherwise see).
+// Fusion alone, without the box fill, the thinning of unseen primitives and the check of seen
+// faces' predicted points (which these tests of matching would otherwise see).
 ObservedFusionOptions fusionOnly() {
   ObservedFusionOptions options;
   options.fill_spacing = 0.0;
   options.unseen_point_fraction = 1.0;
+  options.contradiction_radius = 0.0;
   return options;
 }
 
@@ -436,6 +437,84 @@ TEST(ObservedFusion, UnseenPredictionsKeepAFractionOfTheirPointsSeenFacesKeepAll
     options.unseen_point_fraction = bad;
     EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
   }
+}
+
+// How many of the primitive's points satisfy `where`.
+template <typename Where>
+std::size_t countPoints(const PlanarPrimitive& primitive, Where where) {
+  std::size_t n = 0;
+  for (const auto& p : primitive.points) n += where(Eigen::Vector3d(p.x, p.y, p.z)) ? 1 : 0;
+  return n;
+}
+
+TEST(ObservedFusion, ASeenFacesPredictedPointsWhereTheScanSawNoSuchFaceAreDropped) {
+  // Seen: the top z = 1 (x, y in 0..1) and a wall x = 0.5 up to z = 0.5 only (a step). The
+  // network spreads the wall's points (rows 0.025 apart) up to z = 1. The observed diagonal is
+  // about 1.78, so the radius 0.03 is 0.053: the wall's two top rows (z = 0.9625 and 0.9875) are
+  // that close to the top's points (its grid has a row at x = 0.5), where the scan saw the top
+  // and no wall, and go. The rows below, down to z = 0.55, are near no seen point: the scan
+  // says nothing there, and they stay.
+  const Plane top = Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1});
+  const Plane wall = Plane::fromPointAndNormal({0.5, 0, 0}, {1, 0, 0});
+  const std::vector<PlanarPrimitive> observed = {patch(top, {0.5, 0.5, 1}, 1.1, 23, 1.0f),
+                                                 patch(wall, {0.5, 0.5, 0.25}, 0.5, 10, 1.0f)};
+  std::vector<PlanarPrimitive> completed = {patch(wall, {0.5, 0.5, 0.5}, 1.0, 40, 0.9f)};
+  EXPECT_EQ(ObservedFusionOptions{}.contradiction_radius, 0.03);  // on by default
+  ObservedFusionOptions options = fusionOnly();
+  options.contradiction_radius = 0.03;
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(fused.size(), 2u);  // the wall, and the top added as seen
+  const PlanarPrimitive& fused_wall = fused[0];
+  EXPECT_LT(maxDistanceToPlane(fused_wall, wall), 1e-6);
+  const auto high = [](const Eigen::Vector3d& p) { return p.z() > 0.95; };
+  const auto middle = [](const Eigen::Vector3d& p) { return p.z() > 0.56 && p.z() < 0.94; };
+  EXPECT_EQ(countPoints(completed[0], high), 80u);
+  EXPECT_EQ(countPoints(fused_wall, high), 0u);
+  EXPECT_EQ(countPoints(fused_wall, middle), countPoints(completed[0], middle));
+  EXPECT_EQ(report.contradicted_points, 80u);
+  EXPECT_EQ(fused_wall.points.size(), 100u + 1600u - 80u);
+  EXPECT_NE(describe(report).find(" points of seen faces dropped where the scan contradicts them"), std::string::npos)
+      << describe(report);
+  // Off, every predicted point stays.
+  options.contradiction_radius = 0.0;
+  EXPECT_EQ(fuseWithObserved(completed, observed, options)[0].points.size(), 100u + 1600u);
+  for (double bad : {-0.03, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    options.contradiction_radius = bad;
+    EXPECT_THROW(fuseWithObserved(completed, observed, options), InvalidInputError);
+  }
+}
+
+TEST(ObservedFusion, ASeenFacesPredictedPointsInsideTheSeenSolidAreDropped) {
+  // Seen: the bottom z = 0 (normal -z) over x, y in 0..1, the top z = 1 (normal +z) over x in
+  // 0.3..1.3, and a small step face z = 0.5 (normal +z) at x in 0..0.2. The network spreads the
+  // step's points over x, y in 0..1. Looking up and down from one at x > 0.4, the first seen
+  // surfaces (the top, the bottom) face away from it: it is inside the solid, and goes. Over the
+  // seen step (x < 0.2) nothing is above: they stay. No seen point but the step's own lies within
+  // the radius (about 0.056) of any of them.
+  const Plane bottom = Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1});
+  const Plane top = Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1});
+  const Plane step = Plane::fromPointAndNormal({0, 0, 0.5}, {0, 0, 1});
+  const std::vector<PlanarPrimitive> observed = {patch(bottom, {0.5, 0.5, 0}, 1.0, 20, 1.0f),
+                                                 patch(top, {0.8, 0.5, 1}, 1.0, 20, 1.0f),
+                                                 patch(step, {0.1, 0.5, 0.5}, 0.2, 5, 1.0f)};
+  std::vector<PlanarPrimitive> completed = {patch(step, {0.5, 0.5, 0.5}, 1.0, 20, 0.9f)};
+  ObservedFusionOptions options = fusionOnly();
+  options.contradiction_radius = 0.03;
+  ObservedFusionReport report;
+  auto fused = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(fused.size(), 3u);
+  const auto over_the_solid = [](const Eigen::Vector3d& p) { return p.x() > 0.4; };
+  const auto over_the_step = [](const Eigen::Vector3d& p) { return p.x() < 0.2; };
+  EXPECT_EQ(countPoints(completed[0], over_the_solid), 240u);
+  EXPECT_EQ(countPoints(fused[0], over_the_solid), 0u);
+  EXPECT_EQ(countPoints(fused[0], over_the_step), 25u + countPoints(completed[0], over_the_step));
+  EXPECT_GE(report.contradicted_points, 240u);
+  // The same with the network's normal the other way: looking down and up is symmetric.
+  completed[0].plane = step.flipped();
+  fused = fuseWithObserved(completed, observed, options, &report);
+  EXPECT_EQ(countPoints(fused[0], over_the_solid), 0u);
+  EXPECT_EQ(countPoints(fused[0], over_the_step), 25u + countPoints(completed[0], over_the_step));
 }
 
 }  // namespace

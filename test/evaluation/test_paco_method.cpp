@@ -144,4 +144,5 @@ TEST(PacoMethod, DefaultsAreTheLibrarys) {
   EXPECT_EQ(method.clip_margin, fusion.clip_margin);
   EXPECT_EQ(method.fill_box_spacing, fusion.fill_spacing);
   EXPECT_EQ(method.unseen_point_fraction, fusion.unseen_point_fraction);
+  EXPECT_EQ(method.contradiction_radius, fusion.contradiction_radius);
 }

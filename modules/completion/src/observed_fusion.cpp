@@ -364,6 +364,73 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
   }
 }
 
+// Seen points farther than this (fraction of the diagonal) along a face's normal count as a
+// surface in front of or behind it: beyond the scatter of the face's own seen points about its
+// plane (the segmenter's inlier distance is 0.004 by default), so they never do.
+constexpr double kContradictionGap = 0.01;
+
+// Drops the network's points of a seen face that the scan contradicts (ObservedFusionOptions::
+// contradiction_radius); returns how many went. `own` are the face's seen points, `scan` every
+// observed point, `observed` the segments.
+std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const Plane& plane,
+                             const pcl::PointCloud<pcl::PointNormal>& own,
+                             const std::vector<const pcl::PointCloud<pcl::PointNormal>*>& scan,
+                             const std::vector<PlanarPrimitive>& observed, std::size_t min_points, double radius,
+                             double gap) {
+  if (predicted.empty() || !(radius > 0.0)) return 0;
+  std::vector<Eigen::Vector3d> queries;
+  queries.reserve(predicted.size());
+  for (const auto& p : predicted) queries.push_back(position(p));
+  const std::vector<double> to_scan = nearestDistances(queries, scan);
+  const std::vector<double> to_own = nearestDistances(queries, {&own});
+
+  // The seen points of segments facing along the plane's normal (within 60 degrees), binned
+  // across it: what a line along the normal meets.
+  const Eigen::Vector3d n = plane.normal.normalized();
+  const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+  struct Met {
+    double a, b, t;    // across the normal, and along it
+    bool faces_along;  // its segment's normal points along +n
+  };
+  std::vector<Met> met;
+  std::unordered_map<long long, std::vector<std::size_t>> bins;
+  const auto bin = [radius](double x) { return static_cast<long long>(std::floor(x / radius)); };
+  const auto key = [](long long i, long long j) { return i * 2000003LL + j; };
+  for (const auto& segment : observed) {
+    if (!isTrusted(segment, min_points)) continue;
+    const double facing = segment.plane.normal.normalized().dot(n);
+    if (std::abs(facing) < 0.5) continue;
+    for (const auto& p : segment.points) {
+      const Eigen::Vector3d x = position(p);
+      met.push_back({x.dot(u), x.dot(v), x.dot(n), facing > 0.0});
+      bins[key(bin(met.back().a), bin(met.back().b))].push_back(met.size() - 1);
+    }
+  }
+  // Looking along the normal both ways, the first seen surface on each side faces away: the
+  // point is behind both, in the solid.
+  const auto inside = [&](const Eigen::Vector3d& q) {
+    const double qa = q.dot(u), qb = q.dot(v), qt = q.dot(n);
+    const Met *ahead = nullptr, *behind = nullptr;
+    for (long long da = -1; da <= 1; ++da)
+      for (long long db = -1; db <= 1; ++db) {
+        const auto found = bins.find(key(bin(qa) + da, bin(qb) + db));
+        if (found == bins.end()) continue;
+        for (std::size_t i : found->second) {
+          const Met& m = met[i];
+          if ((m.a - qa) * (m.a - qa) + (m.b - qb) * (m.b - qb) > radius * radius) continue;
+          if (m.t > qt + gap && (!ahead || m.t < ahead->t)) ahead = &m;
+          if (m.t < qt - gap && (!behind || m.t > behind->t)) behind = &m;
+        }
+      }
+    return ahead && ahead->faces_along && behind && !behind->faces_along;
+  };
+  return keepWhere(predicted, [&](std::size_t i) {
+    // The scan saw this spot, and not this face there.
+    const bool seen_without_the_face = to_scan[i] < radius && to_own[i] >= radius;
+    return !seen_without_the_face && !inside(queries[i]);
+  });
+}
+
 }  // namespace
 
 std::string describe(const ObservedFusionReport& report) {
@@ -385,7 +452,10 @@ std::string describe(const ObservedFusionReport& report) {
                                          : "") +
          (report.thinned_points
               ? ", " + std::to_string(report.thinned_points) + " points of unseen primitives thinned out"
-              : "");
+              : "") +
+         (report.contradicted_points ? ", " + std::to_string(report.contradicted_points) +
+                                           " points of seen faces dropped where the scan contradicts them"
+                                     : "");
 }
 
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
@@ -396,10 +466,11 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       !std::isfinite(options.align_unseen_degrees) || options.align_unseen_degrees < 0.0 ||
       std::isnan(options.clip_margin) || options.clip_margin < 0.0 || !std::isfinite(options.fill_spacing) ||
       options.fill_spacing < 0.0 || !std::isfinite(options.fill_empty_radius) || options.fill_empty_radius < 0.0 ||
+      !std::isfinite(options.contradiction_radius) || options.contradiction_radius < 0.0 ||
       !(options.unseen_point_fraction > 0.0 && options.unseen_point_fraction <= 1.0))
     throw InvalidInputError(
-        "fuseWithObserved: max_angle_degrees, max_distance, align_unseen_degrees, fill_spacing and "
-        "fill_empty_radius must be finite and >= 0, clip_margin >= 0 (infinity = off), "
+        "fuseWithObserved: max_angle_degrees, max_distance, align_unseen_degrees, fill_spacing, "
+        "fill_empty_radius and contradiction_radius must be finite and >= 0, clip_margin >= 0 (infinity = off), "
         "unseen_point_fraction in (0, 1]");
   // Six faces of (1/spacing)^2 grid points each: below 0.001 that is millions of points.
   if (options.fill_spacing > 0.0 && options.fill_spacing < kMinFillSpacing)
@@ -419,6 +490,8 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
                    [&](std::size_t a, std::size_t b) { return observed[a].points.size() > observed[b].points.size(); });
 
   std::vector<bool> snapped(completed.size(), false), absorbed(completed.size(), false);
+  // The network's points of each seen face, kept apart from its seen points until they are checked.
+  std::vector<pcl::PointCloud<pcl::PointNormal>> predicted_points(completed.size());
   std::vector<PlanarPrimitive> unmatched;
   std::vector<std::size_t> matches;
   for (std::size_t o : order) {
@@ -449,6 +522,8 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     PlanarPrimitive& target = completed[best];
     if (!snapped[best]) {
       takePlane(target, seen.plane);
+      predicted_points[best] = std::move(target.points);
+      target.points.clear();
       // A seen face is certain, whatever the network's score: confidence 1, like the unmatched
       // observed segments (the assembler's candidate-face budget never drops those).
       target.confidence = 1.0f;
@@ -463,9 +538,22 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     for (std::size_t c : matches) {
       if (c == best || snapped[c]) continue;
       projectOnto(target.plane, completed[c].points);
-      target.points += completed[c].points;
+      predicted_points[best] += completed[c].points;
       absorbed[c] = true;
       ++counts.absorbed;
+    }
+  }
+  {
+    std::vector<const pcl::PointCloud<pcl::PointNormal>*> scan;
+    for (const auto& segment : observed) scan.push_back(&segment.points);
+    const double diagonal = diagonalOf(observed);
+    for (std::size_t c = 0; c < completed.size(); ++c) {
+      if (!snapped[c]) continue;
+      counts.contradicted_points +=
+          dropContradicted(predicted_points[c], completed[c].plane, completed[c].points, scan, observed,
+                           options.min_observed_points, options.contradiction_radius * diagonal,
+                           kContradictionGap * diagonal);
+      completed[c].points += predicted_points[c];
     }
   }
   const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points);

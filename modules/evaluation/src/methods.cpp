@@ -267,6 +267,7 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     fusion.clip_margin = options.clip_margin;
     fusion.fill_spacing = options.fill_box_spacing;
     fusion.unseen_point_fraction = options.unseen_point_fraction;
+    fusion.contradiction_radius = options.contradiction_radius;
     if (options.known_extent_oracle) fusion.known_extent_points = positionsOf(in.gt_points);
     primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation), fusion);
     out.seconds["fuse"] = secondsSince(fuse_start);

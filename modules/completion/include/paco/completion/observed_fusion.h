@@ -56,6 +56,18 @@ struct ObservedFusionOptions {
   /// give that side an outer hull where the network put nothing (doc/results.md).
   double fill_spacing = 0.02;
   double fill_empty_radius = 0.05;
+  /// The network's points of a seen face that the scan contradicts are dropped (fraction of the
+  /// observed points' diagonal; 0 = off). The network spreads its points over the whole plane it
+  /// predicts; on a seen face they carry the face into its hidden part, but on a small face (a
+  /// step, a slot's wall) most fall where the face is not, often right through the solid, and the
+  /// assemblers then build faces there (on MFCAD validation parts at 25 % missing, two in three
+  /// of them lie off the face; doc/results.md). A point is contradicted when
+  ///  - an observed point lies within this distance but none of the face's own seen points does:
+  ///    the scan saw that spot, and not this face there; or
+  ///  - looking along the face's normal both ways, the first seen surface met within this
+  ///    distance of the line on each side faces away from it: it lies inside the seen solid.
+  /// Points the scan says nothing about stay.
+  double contradiction_radius = 0.03;
   /// Unseen completed primitives keep this fraction of their points, evenly spaced (in (0, 1];
   /// 1 = all), but at least `unseen_min_points` (all when they have fewer). PolyFit weighs
   /// every point alike, and the network's points of an unseen face are a guess: at full weight
@@ -91,6 +103,7 @@ struct ObservedFusionReport {
   std::size_t box_faces_taken = 0; ///< unseen completed primitives that hosted box-face points and took the face's plane
   std::size_t fill_in_seen_free_space = 0;  ///< uncovered box-face points left out: the scan shows them in empty space
   std::size_t thinned_points = 0;  ///< points of unseen completed primitives left out (unseen_point_fraction)
+  std::size_t contradicted_points = 0;  ///< the network's points of seen faces the scan contradicts, dropped
 };
 
 /// One line for logs: "N primitives took a seen plane, N duplicates absorbed, N seen faces added"
@@ -101,7 +114,8 @@ std::string describe(const ObservedFusionReport& report);
 /// same frame). Observed segments are taken largest first. Each is matched to the completed
 /// primitive whose plane is nearest to its points within the tolerances; the first match
 /// replaces that primitive's plane by the observed one (keeping the predicted orientation),
-/// projects its predicted points onto it, adds the observed points and sets its confidence to 1
+/// projects its predicted points onto it (dropping those the scan contradicts, see
+/// `contradiction_radius`), adds the observed points and sets its confidence to 1
 /// (the face was seen); later matches to the same primitive add their points. Other completed
 /// primitives within the tolerances of the same observed segment are duplicates: their points
 /// are projected onto the chosen one and they are removed. Unmatched observed segments are
