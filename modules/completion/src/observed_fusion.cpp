@@ -191,77 +191,110 @@ std::size_t thinOut(pcl::PointCloud<pcl::PointNormal>& points, double fraction, 
   });
 }
 
-// Space the scan shows to be empty: a point is in front of a seen surface when, looking from it
-// along one of the box axes, the first trusted observed point met (within `radius` of the line)
-// belongs to a segment whose normal faces back at it. A box-face point there lies over a seen
-// step, notch or chamfer, or in a gap the part does not fill: the part's boundary is that surface,
-// and filling the box face would close the concavity. Segments seen edge-on (more than 60 degrees
-// off the axis) neither show nor block. Only the hidden side of a seen surface can hold material,
-// so this needs no guess about what was not seen.
-class SeenFreeSpace {
+// What the scan's trusted segments show along lines of sight: for a point and one of a few
+// directions, the first seen point met each way along the line through it (within `radius` of
+// the line, and more than `gap` from the point along it). Segments seen edge-on (more than 60
+// degrees off the direction) neither show nor block.
+class SightLines {
  public:
-  SeenFreeSpace(const std::vector<PlanarPrimitive>& observed, std::size_t min_points, const Eigen::Matrix3d& axes,
-                double radius)
-      : radius_(radius) {
-    if (!(radius_ > 0.0)) return;  // a line of no width meets no point: nothing shows empty
-    for (int k = 0; k < 3; ++k) {
-      Axis& axis = axes_[k];
-      axis.along = axes.col(k);
-      axis.across = axes.col((k + 1) % 3);
-      axis.up = axes.col((k + 2) % 3);
+  struct Met {
+    double a, b;      // across the direction
+    double t;         // along it
+    bool faces_along; // its segment's normal points along the direction
+  };
+  struct FirstMet {
+    const Met* ahead = nullptr;   // along +direction
+    const Met* behind = nullptr;  // along -direction
+  };
+
+  /// One direction per frame: its columns are the direction and two unit vectors across it.
+  SightLines(const std::vector<PlanarPrimitive>& observed, std::size_t min_points,
+             const std::vector<Eigen::Matrix3d>& frames, double radius)
+      : radius_(radius), directions_(frames.size()) {
+    if (!(radius_ > 0.0)) return;  // a line of no width meets no point
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      Direction& direction = directions_[k];
+      direction.along = frames[k].col(0);
+      direction.across = frames[k].col(1);
+      direction.up = frames[k].col(2);
       for (const auto& segment : observed) {
         if (!isTrusted(segment, min_points)) continue;
-        const double facing = segment.plane.normal.normalized().dot(axis.along);
+        const double facing = segment.plane.normal.normalized().dot(direction.along);
         if (std::abs(facing) < kMinFacing) continue;
         for (const auto& p : segment.points) {
           const Eigen::Vector3d x = position(p);
-          axis.points.push_back({x.dot(axis.across), x.dot(axis.up), x.dot(axis.along), facing > 0.0});
-          axis.bins[key(bin(axis.points.back().a), bin(axis.points.back().b))].push_back(axis.points.size() - 1);
+          direction.points.push_back({x.dot(direction.across), x.dot(direction.up), x.dot(direction.along), facing > 0.0});
+          direction.bins[key(bin(direction.points.back().a), bin(direction.points.back().b))].push_back(
+              direction.points.size() - 1);
         }
       }
     }
   }
 
-  bool showsEmpty(const Eigen::Vector3d& q) const {
-    if (!(radius_ > 0.0)) return false;
-    for (const Axis& axis : axes_) {
-      const double qa = q.dot(axis.across), qb = q.dot(axis.up), qt = q.dot(axis.along);
-      const Projected *ahead = nullptr, *behind = nullptr;  // first met along +axis and along -axis
-      const long long ia = bin(qa), ib = bin(qb);
-      for (long long da = -1; da <= 1; ++da)
-        for (long long db = -1; db <= 1; ++db) {
-          const auto found = axis.bins.find(key(ia + da, ib + db));
-          if (found == axis.bins.end()) continue;
-          for (std::size_t i : found->second) {
-            const Projected& p = axis.points[i];
-            if ((p.a - qa) * (p.a - qa) + (p.b - qb) * (p.b - qb) > radius_ * radius_) continue;
-            if (p.t > qt && (!ahead || p.t < ahead->t)) ahead = &p;
-            if (p.t < qt && (!behind || p.t > behind->t)) behind = &p;
-          }
+  std::size_t size() const { return directions_.size(); }
+
+  FirstMet firstMet(const Eigen::Vector3d& q, std::size_t k, double gap = 0.0) const {
+    FirstMet first;
+    if (!(radius_ > 0.0)) return first;
+    const Direction& direction = directions_[k];
+    const double qa = q.dot(direction.across), qb = q.dot(direction.up), qt = q.dot(direction.along);
+    const long long ia = bin(qa), ib = bin(qb);
+    for (long long da = -1; da <= 1; ++da)
+      for (long long db = -1; db <= 1; ++db) {
+        const auto found = direction.bins.find(key(ia + da, ib + db));
+        if (found == direction.bins.end()) continue;
+        for (std::size_t i : found->second) {
+          const Met& p = direction.points[i];
+          if ((p.a - qa) * (p.a - qa) + (p.b - qb) * (p.b - qb) > radius_ * radius_) continue;
+          if (p.t > qt + gap && (!first.ahead || p.t < first.ahead->t)) first.ahead = &p;
+          if (p.t < qt - gap && (!first.behind || p.t > first.behind->t)) first.behind = &p;
         }
-      // Looking along +axis, a surface faces back when its normal points along -axis.
-      if ((ahead && !ahead->positive) || (behind && behind->positive)) return true;
-    }
-    return false;
+      }
+    return first;
   }
 
  private:
   static constexpr double kMinFacing = 0.5;  // cos 60 degrees
-  struct Projected {
-    double a, b;    // across the axis
-    double t;       // along it
-    bool positive;  // its segment's normal points along +axis
-  };
-  struct Axis {
+  struct Direction {
     Eigen::Vector3d along, across, up;
-    std::vector<Projected> points;
+    std::vector<Met> points;
     std::unordered_map<long long, std::vector<std::size_t>> bins;
   };
   long long bin(double x) const { return static_cast<long long>(std::floor(x / radius_)); }
   static long long key(long long ia, long long ib) { return ia * 2000003LL + ib; }
 
   double radius_;
-  std::array<Axis, 3> axes_;
+  std::vector<Direction> directions_;
+};
+
+// Space the scan shows to be empty: a point is in front of a seen surface when, looking from it
+// along one of the box axes, the first seen point met belongs to a segment whose normal faces
+// back at it. A box-face point there lies over a seen step, notch or chamfer, or in a gap the
+// part does not fill: the part's boundary is that surface, and filling the box face would close
+// the concavity. Only the hidden side of a seen surface can hold material, so this needs no
+// guess about what was not seen.
+class SeenFreeSpace {
+ public:
+  SeenFreeSpace(const std::vector<PlanarPrimitive>& observed, std::size_t min_points, const Eigen::Matrix3d& axes,
+                double radius)
+      : lines_(observed, min_points, boxAxisFrames(axes), radius) {}
+
+  bool showsEmpty(const Eigen::Vector3d& q) const {
+    for (std::size_t k = 0; k < lines_.size(); ++k) {
+      const SightLines::FirstMet first = lines_.firstMet(q, k);
+      // Looking along +axis, a surface faces back when its normal points along -axis.
+      if ((first.ahead && !first.ahead->faces_along) || (first.behind && first.behind->faces_along)) return true;
+    }
+    return false;
+  }
+
+ private:
+  static std::vector<Eigen::Matrix3d> boxAxisFrames(const Eigen::Matrix3d& axes) {
+    std::vector<Eigen::Matrix3d> frames(3);
+    for (int k = 0; k < 3; ++k) frames[k] << axes.col(k), axes.col((k + 1) % 3), axes.col((k + 2) % 3);
+    return frames;
+  }
+  SightLines lines_;
 };
 
 // Adds grid points on the faces of the seen box where no fused point is near and the scan does
@@ -384,45 +417,16 @@ std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const
   const std::vector<double> to_scan = nearestDistances(queries, scan);
   const std::vector<double> to_own = nearestDistances(queries, {&own});
 
-  // The seen points of segments facing along the plane's normal (within 60 degrees), binned
-  // across it: what a line along the normal meets.
-  const Eigen::Vector3d n = plane.normal.normalized();
-  const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-  struct Met {
-    double a, b, t;    // across the normal, and along it
-    bool faces_along;  // its segment's normal points along +n
-  };
-  std::vector<Met> met;
-  std::unordered_map<long long, std::vector<std::size_t>> bins;
-  const auto bin = [radius](double x) { return static_cast<long long>(std::floor(x / radius)); };
-  const auto key = [](long long i, long long j) { return i * 2000003LL + j; };
-  for (const auto& segment : observed) {
-    if (!isTrusted(segment, min_points)) continue;
-    const double facing = segment.plane.normal.normalized().dot(n);
-    if (std::abs(facing) < 0.5) continue;
-    for (const auto& p : segment.points) {
-      const Eigen::Vector3d x = position(p);
-      met.push_back({x.dot(u), x.dot(v), x.dot(n), facing > 0.0});
-      bins[key(bin(met.back().a), bin(met.back().b))].push_back(met.size() - 1);
-    }
-  }
   // Looking along the normal both ways, the first seen surface on each side faces away: the
   // point is behind both, in the solid.
+  const Eigen::Vector3d n = plane.normal.normalized();
+  const Eigen::Vector3d u = n.unitOrthogonal();
+  Eigen::Matrix3d frame;
+  frame << n, u, n.cross(u);
+  const SightLines lines(observed, min_points, {frame}, radius);
   const auto inside = [&](const Eigen::Vector3d& q) {
-    const double qa = q.dot(u), qb = q.dot(v), qt = q.dot(n);
-    const Met *ahead = nullptr, *behind = nullptr;
-    for (long long da = -1; da <= 1; ++da)
-      for (long long db = -1; db <= 1; ++db) {
-        const auto found = bins.find(key(bin(qa) + da, bin(qb) + db));
-        if (found == bins.end()) continue;
-        for (std::size_t i : found->second) {
-          const Met& m = met[i];
-          if ((m.a - qa) * (m.a - qa) + (m.b - qb) * (m.b - qb) > radius * radius) continue;
-          if (m.t > qt + gap && (!ahead || m.t < ahead->t)) ahead = &m;
-          if (m.t < qt - gap && (!behind || m.t > behind->t)) behind = &m;
-        }
-      }
-    return ahead && ahead->faces_along && behind && !behind->faces_along;
+    const SightLines::FirstMet first = lines.firstMet(q, 0, gap);
+    return first.ahead && first.ahead->faces_along && first.behind && !first.behind->faces_along;
   };
   return keepWhere(predicted, [&](std::size_t i) {
     // The scan saw this spot, and not this face there.
