@@ -60,8 +60,8 @@ struct ObservedFusionOptions {
   /// observed points' diagonal; 0 = off). The network spreads its points over the whole plane it
   /// predicts; on a seen face they carry the face into its hidden part, but on a small face (a
   /// step, a slot's wall) most fall where the face is not, often right through the solid, and the
-  /// assemblers then build faces there (on MFCAD validation parts at 25 % missing, two in three
-  /// of them lie off the face; doc/results.md). A point is contradicted when
+  /// assemblers then build faces there (on MFCAD validation parts at 25 % missing, half of those
+  /// away from the face's seen points lie off the face; doc/results.md). A point is contradicted when
   ///  - an observed point lies within this distance but none of the face's own seen points does:
   ///    the scan saw that spot, and not this face there; or
   ///  - looking along the face's normal both ways, the first seen surface met within this
