@@ -448,7 +448,7 @@ std::size_t countPoints(const PlanarPrimitive& primitive, Where where) {
 }
 
 TEST(ObservedFusion, ASeenFacesPredictedPointsWhereTheScanSawNoSuchFaceAreDropped) {
-  // Seen: the top z = 1 (x, y in 0..1) and a wall x = 0.5 up to z = 0.5 only (a step). The
+  // Seen: the top z = 1 (x, y in -0.05..1.05) and a wall x = 0.5 up to z = 0.5 only (a step). The
   // network spreads the wall's points (rows 0.025 apart) up to z = 1. The observed diagonal is
   // about 1.78, so the radius 0.03 is 0.053: the wall's two top rows (z = 0.9625 and 0.9875) are
   // that close to the top's points (its grid has a row at x = 0.5), where the scan saw the top
