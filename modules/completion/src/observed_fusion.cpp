@@ -403,18 +403,16 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
 constexpr double kContradictionGap = 0.01;
 
 // Drops the network's points of a seen face that the scan contradicts (ObservedFusionOptions::
-// contradiction_radius); returns how many went. `own` are the face's seen points, `scan` every
-// observed point, `observed` the segments.
+// contradiction_radius); returns how many went. `own` are the face's seen points, `to_scan` each
+// predicted point's distance to the nearest observed point, `observed` the segments.
 std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const Plane& plane,
-                             const pcl::PointCloud<pcl::PointNormal>& own,
-                             const std::vector<const pcl::PointCloud<pcl::PointNormal>*>& scan,
+                             const pcl::PointCloud<pcl::PointNormal>& own, const double* to_scan,
                              const std::vector<PlanarPrimitive>& observed, std::size_t min_points, double radius,
                              double gap) {
   if (predicted.empty() || !(radius > 0.0)) return 0;
   std::vector<Eigen::Vector3d> queries;
   queries.reserve(predicted.size());
   for (const auto& p : predicted) queries.push_back(position(p));
-  const std::vector<double> to_scan = nearestDistances(queries, scan);
   const std::vector<double> to_own = nearestDistances(queries, {&own});
 
   // Looking along the normal both ways, the first seen surface on each side faces away: the
@@ -547,19 +545,29 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       ++counts.absorbed;
     }
   }
-  {
+  if (options.contradiction_radius > 0.0) {
+    // One search of the whole scan for the network's points of every seen face (one kd-tree).
     std::vector<const pcl::PointCloud<pcl::PointNormal>*> scan;
     for (const auto& segment : observed) scan.push_back(&segment.points);
+    std::vector<Eigen::Vector3d> queries;
+    for (std::size_t c = 0; c < completed.size(); ++c)
+      if (snapped[c])
+        for (const auto& p : predicted_points[c]) queries.push_back(position(p));
+    const std::vector<double> to_scan = nearestDistances(queries, scan);
     const double diagonal = diagonalOf(observed);
+    std::size_t first = 0;
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (!snapped[c]) continue;
+      const std::size_t count = predicted_points[c].size();
       counts.contradicted_points +=
-          dropContradicted(predicted_points[c], completed[c].plane, completed[c].points, scan, observed,
-                           options.min_observed_points, options.contradiction_radius * diagonal,
+          dropContradicted(predicted_points[c], completed[c].plane, completed[c].points, to_scan.data() + first,
+                           observed, options.min_observed_points, options.contradiction_radius * diagonal,
                            kContradictionGap * diagonal);
-      completed[c].points += predicted_points[c];
+      first += count;
     }
   }
+  for (std::size_t c = 0; c < completed.size(); ++c)
+    if (snapped[c]) completed[c].points += predicted_points[c];
   const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points);
   if (options.align_unseen_degrees > 0.0) {
     const auto directions = seenDirections(seen_normals);
