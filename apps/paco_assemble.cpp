@@ -157,13 +157,22 @@ int run(int argc, char** argv) {
     std::printf("polyfit: %zu candidate faces (%.3f s), MIP %zu variables x %zu constraints solved %s in %.3f s\n",
                 result.num_candidate_faces, result.seconds_partition, result.num_variables, result.num_constraints,
                 result.solution_is_optimal ? "to optimality" : "(not proven optimal)", result.seconds_solve);
+    if (result.num_planes_separated)
+      std::printf("polyfit: %zu planes shifted by 2e-4 of the diagonal, so that no four meet in a point and no three "
+                  "share a line\n",
+                  result.num_planes_separated);
     if (result.num_warm_start_faces)
-      std::printf("polyfit: started from the cell complex's surface (%zu candidate faces)\n", result.num_warm_start_faces);
+      std::printf("polyfit: started from the cell complex's surface (%zu candidate faces; %zu around edges PolyFit "
+                  "forbids left to the solver)\n",
+                  result.num_warm_start_faces, result.num_warm_start_faces_released);
   } else {
     std::printf("cell-complex: %zu cells (%.3f s), %zu cell faces, labelling and mesh %.3f s\n", result.num_cells,
                 result.seconds_partition, result.num_candidate_faces, result.seconds_solve);
   }
-  if (result.hit_time_limit) std::printf("note: the time limit was reached; the best solution found is used\n");
+  if (result.returned_warm_start)
+    std::printf("note: %s\n", result.message.c_str());
+  else if (result.hit_time_limit)
+    std::printf("note: the time limit was reached; the best solution found is used\n");
 
   timer.start("save");
   paco::app::PendingOutput pending(output);

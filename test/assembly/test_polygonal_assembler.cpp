@@ -343,6 +343,7 @@ TEST(PolyFit, WarmStartIsTheCellComplexSurfaceAndKeepsTheOptimum) {
   const paco::AssemblyResult box = assemble(paco::test::makeBox({0, 0, 0}, {1, 0.7, 0.4}), true, "cbc", box_mesh);
   ASSERT_TRUE(box.ok()) << box.message;
   EXPECT_EQ(box.num_warm_start_faces, 6u);
+  EXPECT_EQ(box.num_warm_start_faces_released, 0u);  // every start edge has two planes
   EXPECT_EQ(box_mesh.faces.size(), 6u);
 
   for (const auto& shape : shapes()) {
@@ -359,6 +360,75 @@ TEST(PolyFit, WarmStartIsTheCellComplexSurfaceAndKeepsTheOptimum) {
     EXPECT_EQ(countPlanarRegions(warm_mesh), countPlanarRegions(cold_mesh));
     EXPECT_NEAR(paco::signedVolume(warm_mesh), paco::signedVolume(cold_mesh), 1e-9 * paco::signedVolume(cold_mesh));
   }
+}
+
+// A box and a small patch of a plane that touches it only at one corner (or along one edge).
+std::vector<PlanarPrimitive> boxWithAPlaneThrough(const Eigen::Vector3d& normal, const Eigen::Vector3d& corner,
+                                                  const std::function<Eigen::Vector3d(double, double)>& patch_point) {
+  // The box's faces, 300 points each.
+  const Eigen::Vector3d lo(0, 0, 0), hi(1.0, 0.7, 0.4);
+  std::mt19937 random(7);
+  std::vector<PlanarPrimitive> primitives;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      n[axis] = side ? 1.0 : -1.0;
+      const double at = side ? hi[axis] : lo[axis];
+      PlanarPrimitive face;
+      face.plane = paco::Plane(n, -n[axis] * at);
+      for (int i = 0; i < 300; ++i) {
+        Eigen::Vector3d x;
+        for (int k = 0; k < 3; ++k) x[k] = std::uniform_real_distribution<double>(lo[k], hi[k])(random);
+        x[axis] = at;
+        pcl::PointNormal p;
+        p.x = float(x.x()), p.y = float(x.y()), p.z = float(x.z());
+        p.normal_x = float(n.x()), p.normal_y = float(n.y()), p.normal_z = float(n.z());
+        face.points.push_back(p);
+      }
+      primitives.push_back(face);
+    }
+  PlanarPrimitive patch;
+  patch.plane = paco::Plane(normal, -normal.normalized().dot(corner));
+  const Eigen::Vector3f n = patch.plane.normal.cast<float>();
+  std::uniform_real_distribution<double> u(0.02, 0.1);
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector3f x = patch_point(u(random), u(random)).cast<float>();
+    pcl::PointNormal p;
+    p.x = x.x(), p.y = x.y(), p.z = x.z();
+    p.normal_x = n.x(), p.normal_y = n.y(), p.normal_z = n.z();
+    patch.points.push_back(p);
+  }
+  primitives.push_back(patch);
+  return primitives;
+}
+
+TEST(PolyFit, FourPlanesThroughOnePointOrThreeThroughOneLineStillGiveTheBox) {
+  // CGAL's PolyFit names a vertex by three planes: where a fourth passes through it, or a third
+  // through an edge, its program forbids every face around that point (the box had no solution).
+  const Eigen::Vector3d corner(1.0, 0.7, 0.4);
+  const auto through_corner = boxWithAPlaneThrough(Eigen::Vector3d(1, 1, 1), corner, [&](double a, double b) {
+    return Eigen::Vector3d(corner.x() + a, corner.y() + b, corner.z() - a - b);
+  });
+  const auto through_edge = boxWithAPlaneThrough(Eigen::Vector3d(1, 1, 0), corner, [&](double a, double b) {
+    return Eigen::Vector3d(corner.x() + a, corner.y() - a, 4 * b);
+  });
+  for (const auto* primitives : {&through_corner, &through_edge})
+    for (bool warm_start : {true, false}) {
+      SCOPED_TRACE(std::string(primitives == &through_corner ? "corner" : "edge") + (warm_start ? ", warm" : ", cold"));
+      paco::PolygonalAssembler assembler;
+      assembler.setInputPrimitives(*primitives);
+      assembler.setWarmStart(warm_start);
+      assembler.setTimeLimit(60);
+      SurfaceMesh mesh;
+      const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+      ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+      EXPECT_EQ(result.num_planes_separated, 1u);
+      EXPECT_TRUE(result.solution_is_optimal);
+      EXPECT_EQ(result.num_warm_start_faces_released, 0u);  // the start is a solution as it is
+      EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+      EXPECT_EQ(countPlanarRegions(mesh), 6u);
+      EXPECT_NEAR(paco::signedVolume(mesh), 0.28, 1e-3);
+    }
 }
 
 // --- failures --------------------------------------------------------------------------------

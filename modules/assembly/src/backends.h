@@ -22,6 +22,8 @@ struct BackendOutcome {
   std::vector<std::size_t> dropped_for_budget;
   /// polyfit: how many candidate faces the start solution selected (0: no start given).
   std::size_t start_faces = 0;
+  /// polyfit: candidate faces around edges the start may not use, left for the solver to choose.
+  std::size_t start_faces_released = 0;
 };
 
 struct PolyFitOptions {

@@ -29,7 +29,8 @@ struct MipSettings {
   /// then fails this solve instead of aborting the caller.
   bool isolate = true;
   /// Values of the first start.size() variables from a known feasible solution, handed to CBC as
-  /// a MIP start (empty: none). The rest are completed by CBC; GLPK ignores it.
+  /// a MIP start (empty: none). NaN entries and the variables after them are completed by CBC;
+  /// GLPK ignores the start.
   std::vector<double> start;
 };
 
@@ -232,9 +233,11 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     Cbc_setLogLevel(model, settings.verbose ? 1 : 0);
     if (!settings.verbose) Cbc_setParameter(model, "log", "0");
     if (!settings.start.empty() && settings.start.size() <= static_cast<std::size_t>(program.num_columns)) {
-      std::vector<int> columns(settings.start.size());
-      for (std::size_t i = 0; i < columns.size(); ++i) columns[i] = static_cast<int>(i);
-      Cbc_setMIPStartI(model, static_cast<int>(columns.size()), columns.data(), settings.start.data());
+      std::vector<int> columns;
+      std::vector<double> values;
+      for (std::size_t i = 0; i < settings.start.size(); ++i)
+        if (std::isfinite(settings.start[i])) columns.push_back(static_cast<int>(i)), values.push_back(settings.start[i]);
+      Cbc_setMIPStartI(model, static_cast<int>(columns.size()), columns.data(), values.data());
     }
     Cbc_solve(model);
     const double* best = Cbc_bestSolution(model);

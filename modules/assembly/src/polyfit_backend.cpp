@@ -14,6 +14,9 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
+#include <limits>
+#include <map>
 #include <cmath>
 #include <chrono>
 #include <memory>
@@ -97,6 +100,63 @@ std::vector<double> facesOnSolidBoundary(const Reconstruction& reconstruction, c
     selected.push_back(boundary ? 1.0 : 0.0);
   }
   return selected;
+}
+
+// Two rings let CBC complete the start on the validation programs it had rejected; more rings
+// leave it too much to complete within its start heuristic, fewer too little room.
+constexpr int kReleaseRings = 2;
+
+// PolyFit's program (CGAL's formulation) lets a surface use a candidate edge only where exactly
+// four candidate faces meet (two planes crossing), with 0 or 2 of them selected; at any other
+// edge every face must stay unselected. CBC rejects a start that breaks this anywhere as a whole
+// ("mipstart values could not be used"), and the cell complex's surface can break it: where it
+// touches itself along an edge, or near planes that meet in a way CGAL names inconsistently
+// (separateConcurrentPlanes() removes most of those). So the faces around each such edge,
+// `rings` edge-neighbours deep, are left unspecified (NaN): CBC completes that neighbourhood and
+// keeps the rest of the start. Returns how many faces were left unspecified.
+std::size_t releaseFacesAtForbiddenEdges(const CgalMesh& candidates, std::vector<double>& start, int rings) {
+  // CGAL keys an edge by its end points, each computed once per triplet of planes: keying by
+  // their exact coordinates gives the same edges (the copied mesh shares no vertices between
+  // planes).
+  using Corner = std::array<double, 3>;
+  std::map<std::pair<Corner, Corner>, std::vector<std::size_t>> faces_at_edge;
+  std::vector<std::vector<const std::vector<std::size_t>*>> edges_of_face(start.size());
+  std::size_t index = 0;
+  for (auto f : candidates.faces()) {
+    for (auto h : CGAL::halfedges_around_face(candidates.halfedge(f), candidates)) {
+      const Point& a = candidates.point(candidates.source(h));
+      const Point& b = candidates.point(candidates.target(h));
+      Corner ca{a.x(), a.y(), a.z()}, cb{b.x(), b.y(), b.z()};
+      if (cb < ca) std::swap(ca, cb);
+      faces_at_edge[{ca, cb}].push_back(index);
+    }
+    ++index;
+  }
+  for (const auto& [edge, faces] : faces_at_edge)
+    for (std::size_t f : faces) edges_of_face[f].push_back(&faces);
+
+  std::vector<bool> released(start.size(), false);
+  std::vector<std::size_t> frontier;
+  for (const auto& [edge, faces] : faces_at_edge) {
+    std::size_t selected = 0;
+    for (std::size_t f : faces) selected += start[f] == 1.0 ? 1 : 0;
+    const bool allowed = selected == 0 || (faces.size() == 4 && selected == 2);
+    if (allowed) continue;
+    for (std::size_t f : faces)
+      if (!released[f]) released[f] = true, frontier.push_back(f);
+  }
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<std::size_t> next;
+    for (std::size_t f : frontier)
+      for (const auto* neighbours : edges_of_face[f])
+        for (std::size_t g : *neighbours)
+          if (!released[g]) released[g] = true, next.push_back(g);
+    frontier = std::move(next);
+  }
+  std::size_t count = 0;
+  for (std::size_t f = 0; f < start.size(); ++f)
+    if (released[f]) start[f] = std::numeric_limits<double>::quiet_NaN(), ++count;
+  return count;
 }
 
 }  // namespace
@@ -194,6 +254,9 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   mipSettings().verbose = options.verbose;
   if (options.start_solid && !options.start_solid->faces.empty()) {
     mipSettings().start = facesOnSolidBoundary(*reconstruction, *options.start_solid, rotation.transpose());
+    CgalMesh candidates;
+    reconstruction->output_candidate_faces(candidates);
+    outcome.start_faces_released = releaseFacesAtForbiddenEdges(candidates, mipSettings().start, kReleaseRings);
     outcome.start_faces =
         static_cast<std::size_t>(std::count(mipSettings().start.begin(), mipSettings().start.end(), 1.0));
   }

@@ -53,6 +53,77 @@ Plane refit(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& hint) 
   }
 }
 
+// CGAL's PolyFit names each candidate vertex by three of its planes and snaps points closer
+// than 1e-5 (in this unit-diagonal frame) together. Where four planes meet in one point, or three
+// share a line, faces around it get edges that its program sees as open, and it forbids them:
+// a box with a fourth plane through one corner has no solution at all. So planes are moved apart
+// before PolyFit sees them: the least supported plane of each such meeting is shifted, with its
+// points, kSeparation along its normal; the mesh moves by as little. Returns how many shifts
+// were made.
+constexpr double kConcurrencyTolerance = 1e-4;  // ten times CGAL's snapping distance
+constexpr double kSeparation = 2e-4;            // moves the plane beyond the tolerance
+std::size_t separateConcurrentPlanes(std::vector<PlanarPrimitive>& primitives) {
+  const std::size_t n = primitives.size();
+  std::vector<Plane> planes(n);
+  for (std::size_t i = 0; i < n; ++i) planes[i] = refit(primitives[i].points, primitives[i].plane);
+  auto shift = [&](std::size_t k) {
+    const Eigen::Vector3f step = (kSeparation * planes[k].normal).cast<float>();
+    for (auto& p : primitives[k].points) p.x += step.x(), p.y += step.y(), p.z += step.z();
+    primitives[k].plane.offset -= kSeparation;
+    planes[k].offset -= kSeparation;
+  };
+  auto weakest = [&](const std::vector<std::size_t>& meeting) {
+    return *std::min_element(meeting.begin(), meeting.end(), [&](std::size_t a, std::size_t b) {
+      return primitives[a].points.size() < primitives[b].points.size();
+    });
+  };
+  // A shift can, rarely, make a new meeting: scan again, a few times at most.
+  std::size_t shifts = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    const std::size_t shifts_before = shifts;
+    for (std::size_t a = 0; a < n; ++a)
+      for (std::size_t b = a + 1; b < n; ++b) {
+        const Eigen::Vector3d direction = planes[a].normal.cross(planes[b].normal);
+        if (direction.norm() < 1e-3) continue;  // (nearly) parallel: no line
+        // A point of the line of a and b; then the planes through that line, or through one
+        // point of it together with a fourth.
+        const Eigen::Vector3d along = direction.normalized();
+        Eigen::Matrix3d m;
+        m << planes[a].normal.transpose(), planes[b].normal.transpose(), along.transpose();
+        const Eigen::Vector3d on_line =
+            m.colPivHouseholderQr().solve(Eigen::Vector3d(-planes[a].offset, -planes[b].offset, 0.0));
+        std::vector<std::size_t> through_line{a, b};
+        std::vector<std::pair<double, std::size_t>> crossings;  // (position along the line, plane)
+        for (std::size_t c = 0; c < n; ++c) {
+          if (c == a || c == b) continue;
+          const double slope = planes[c].normal.dot(along);
+          const double distance = planes[c].signedDistance(on_line);
+          if (std::abs(slope) < 1e-3) {
+            if (std::abs(distance) < kConcurrencyTolerance) through_line.push_back(c);
+          } else {
+            crossings.emplace_back(-distance / slope, c);
+          }
+        }
+        std::vector<std::size_t> meeting;
+        if (through_line.size() >= 3) {
+          meeting = through_line;
+        } else {
+          std::sort(crossings.begin(), crossings.end());
+          for (std::size_t i = 0; i + 1 < crossings.size() && meeting.empty(); ++i) {
+            const Eigen::Vector3d x = on_line + crossings[i].first * along;
+            if (std::abs(planes[crossings[i + 1].second].signedDistance(x)) < kConcurrencyTolerance)
+              meeting = {a, b, crossings[i].second, crossings[i + 1].second};
+          }
+        }
+        if (meeting.empty()) continue;
+        shift(weakest(meeting));
+        ++shifts;
+      }
+    if (shifts == shifts_before) break;
+  }
+  return shifts;
+}
+
 // num_merged and num_dropped from the fates.
 void countFates(AssemblyResult& result) {
   result.num_merged = result.num_dropped = 0;
@@ -313,9 +384,11 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     options.max_candidate_faces = max_candidate_faces_;
     // The warm start: the cell complex on the same planes, refitted to their points as CGAL
     // refits them, so that its faces lie on PolyFit's candidate faces.
+    std::vector<PlanarPrimitive> separated = primitives;
+    result_.num_planes_separated = separateConcurrentPlanes(separated);
     SurfaceMesh start_solid;
     if (warm_start_ && solver_ == MipSolver::Cbc) {
-      std::vector<PlanarPrimitive> refitted = primitives;
+      std::vector<PlanarPrimitive> refitted = separated;
       for (auto& primitive : refitted) primitive.plane = refit(primitive.points, primitive.plane);
       // PolyFit allows no edge with four faces: relabel cells at such edges right away.
       detail::CellComplexOptions cell_options;
@@ -331,8 +404,22 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       options.seconds = secondsLeft();
       if (!start_solid.faces.empty()) options.start_solid = &start_solid;
     }
-    outcome = detail::runPolyFit(primitives, options, mesh);
+    outcome = detail::runPolyFit(separated, options, mesh);
     result_.num_warm_start_faces = outcome.start_faces;
+    result_.num_warm_start_faces_released = outcome.start_faces_released;
+    // A time-out returns the start rather than nothing, also when CBC could not complete it into
+    // a solution of its own program.
+    if (outcome.status == AssemblyStatus::TimeLimit && !start_solid.faces.empty() && !interruptRequested()) {
+      mesh = start_solid;
+      outcome.status = AssemblyStatus::Success;
+      outcome.message.clear();
+      outcome.dropped_for_budget.clear();  // the start was made from every primitive
+      outcome.hit_time_limit = true;
+      result_.returned_warm_start = true;
+      result_.message =
+          "PolyFit found no solution within the time limit; the surface of its warm start (the cell complex) is "
+          "returned; a longer time limit may let PolyFit finish.";
+    }
     if (!outcome.dropped_for_budget.empty()) {
       // used_[j] is the j-th primitive kept by pre-processing, in input order.
       std::vector<std::size_t> input_index;

@@ -149,7 +149,10 @@ std::map<std::string, Entry>& registry() {
     case AssemblyStatus::Success:
       out.has_mesh = true;
       out.mesh = std::move(mesh);
-      if (result.hit_time_limit) out.message = "time limit hit; the best solution found was used";
+      if (result.returned_warm_start)
+        out.message = "time limit hit without a PolyFit solution; the warm start's surface (the cell complex) was used";
+      else if (result.hit_time_limit)
+        out.message = "time limit hit; the best solution found was used";
       break;
     case AssemblyStatus::NotWatertight:
       out.has_mesh = true;

@@ -74,6 +74,15 @@ struct AssemblyResult {
   int num_crossings_resolved = 0;      ///< cell-complex: cells relabelled to remove non-manifold "X" edges
   std::size_t num_variables = 0, num_constraints = 0;  ///< polyfit: size of the MIP
   std::size_t num_warm_start_faces = 0;  ///< polyfit: candidate faces of the cell-complex start (0: none given)
+  /// polyfit: planes shifted by 2e-4 of the diagonal so that no four meet in one point and no
+  /// three share a line (CGAL's PolyFit forbids every face around such a meeting).
+  std::size_t num_planes_separated = 0;
+  /// polyfit: start faces around candidate edges that PolyFit's program forbids to the start
+  /// (three planes through one line, or four selected faces at an edge), left to the solver.
+  std::size_t num_warm_start_faces_released = 0;
+  /// polyfit: the solver found no solution in time and the warm start's surface (the cell
+  /// complex on the same planes) was returned instead; `message` says so.
+  bool returned_warm_start = false;
   MeshTopology topology;               ///< of the output mesh
   double seconds = 0.0;                ///< wall time of reconstruct()
   double seconds_partition = 0.0;      ///< polyfit: candidate generation; cell-complex: partition
