@@ -158,7 +158,7 @@ int run(int argc, char** argv) {
                 result.num_candidate_faces, result.seconds_partition, result.num_variables, result.num_constraints,
                 result.solution_is_optimal ? "to optimality" : "(not proven optimal)", result.seconds_solve);
     if (result.num_planes_separated)
-      std::printf("polyfit: %zu planes shifted by 2e-4 of the diagonal, so that no four meet in a point and no three "
+      std::printf("polyfit: %zu plane shifts of 5e-5 of the diagonal, so that no four meet in a point and no three "
                   "share a line\n",
                   result.num_planes_separated);
     if (result.num_warm_start_faces)

@@ -8,9 +8,11 @@
 #include <paco/common/progress.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -53,71 +55,95 @@ Plane refit(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& hint) 
   }
 }
 
-// CGAL's PolyFit names each candidate vertex by three of its planes and snaps points closer
-// than 1e-5 (in this unit-diagonal frame) together. Where four planes meet in one point, or three
-// share a line, faces around it get edges that its program sees as open, and it forbids them:
-// a box with a fourth plane through one corner has no solution at all. So planes are moved apart
-// before PolyFit sees them: the least supported plane of each such meeting is shifted, with its
-// points, kSeparation along its normal; the mesh moves by as little. Returns how many shifts
-// were made.
-constexpr double kConcurrencyTolerance = 1e-4;  // ten times CGAL's snapping distance
-constexpr double kSeparation = 2e-4;            // moves the plane beyond the tolerance
+// CGAL's PolyFit names each candidate vertex by three of its planes, and a cutting plane that
+// passes closer than 1e-5 (in this unit-diagonal frame) to a vertex cuts "at" it. Where a fourth
+// plane passes through the vertex of three, or a third plane through the line of two, faces
+// around it get edges named differently on each side; its program sees them as open and forbids
+// them: a box with a fourth plane through one corner has no solution at all. So planes are moved
+// apart before PolyFit sees them, by kSeparation along the normal, points included; the mesh
+// moves by as little. Returns how many shifts were made.
+constexpr double kConcurrencyTolerance = 2e-5;  // twice CGAL's snapping distance
+constexpr double kSeparation = 5e-5;            // moves a plane beyond the tolerance
+constexpr int kMaxShiftsPerPlane = 2;           // among near-coincident planes meetings never end
 std::size_t separateConcurrentPlanes(std::vector<PlanarPrimitive>& primitives) {
   const std::size_t n = primitives.size();
   std::vector<Plane> planes(n);
   for (std::size_t i = 0; i < n; ++i) planes[i] = refit(primitives[i].points, primitives[i].plane);
-  auto shift = [&](std::size_t k) {
-    const Eigen::Vector3f step = (kSeparation * planes[k].normal).cast<float>();
-    for (auto& p : primitives[k].points) p.x += step.x(), p.y += step.y(), p.z += step.z();
-    primitives[k].plane.offset -= kSeparation;
-    planes[k].offset -= kSeparation;
+  // Only meetings inside CGAL's box matter: the points' box, which it enlarges by 5 % of the
+  // diagonal (10 % here, to be safe).
+  Eigen::AlignedBox3d box;
+  for (const auto& primitive : primitives)
+    for (const auto& p : primitive.points) box.extend(position(p));
+  const double margin = 0.1 * box.diagonal().norm();
+  box.min().array() -= margin;
+  box.max().array() += margin;
+
+  // The point of three planes, if they meet in one well-defined point inside the box.
+  auto vertexOf = [&](std::size_t a, std::size_t b, std::size_t c, Eigen::Vector3d& x) {
+    Eigen::Matrix3d m;
+    m << planes[a].normal.transpose(), planes[b].normal.transpose(), planes[c].normal.transpose();
+    if (std::abs(m.determinant()) < 1e-3) return false;  // two parallel, or all through one line
+    x = m.partialPivLu().solve(Eigen::Vector3d(-planes[a].offset, -planes[b].offset, -planes[c].offset));
+    return box.contains(x);
   };
-  auto weakest = [&](const std::vector<std::size_t>& meeting) {
-    return *std::min_element(meeting.begin(), meeting.end(), [&](std::size_t a, std::size_t b) {
+  std::vector<int> times_shifted(n, 0);
+  auto shift = [&](std::size_t k, double sign) {
+    times_shifted[k] += sign > 0 ? 1 : -1;
+    planes[k].offset -= sign * kSeparation;
+    primitives[k].plane.offset -= sign * kSeparation;
+    const Eigen::Vector3f step = (sign * kSeparation * planes[k].normal).cast<float>();
+    for (auto& p : primitives[k].points) p.x += step.x(), p.y += step.y(), p.z += step.z();
+  };
+  // Moves the least supported plane of a meeting if that separates it, else `fallback`, which
+  // always does (it is the plane measured against the others' point or line).
+  auto separate = [&](const std::vector<std::size_t>& meeting, std::size_t fallback,
+                      const std::function<bool()>& still_met) {
+    for (std::size_t k : meeting)
+      if (times_shifted[k] >= kMaxShiftsPerPlane) return false;
+    const std::size_t weakest = *std::min_element(meeting.begin(), meeting.end(), [&](std::size_t a, std::size_t b) {
       return primitives[a].points.size() < primitives[b].points.size();
     });
+    shift(weakest, 1.0);
+    if (weakest != fallback && still_met()) {
+      shift(weakest, -1.0);
+      shift(fallback, 1.0);
+    }
+    return true;
   };
+
   // A shift can, rarely, make a new meeting: scan again, a few times at most.
   std::size_t shifts = 0;
   for (int pass = 0; pass < 3; ++pass) {
     const std::size_t shifts_before = shifts;
     for (std::size_t a = 0; a < n; ++a)
       for (std::size_t b = a + 1; b < n; ++b) {
+        // Three planes through one line: c within the tolerance of two points of the line of a, b.
         const Eigen::Vector3d direction = planes[a].normal.cross(planes[b].normal);
         if (direction.norm() < 1e-3) continue;  // (nearly) parallel: no line
-        // A point of the line of a and b; then the planes through that line, or through one
-        // point of it together with a fourth.
-        const Eigen::Vector3d along = direction.normalized();
-        Eigen::Matrix3d m;
-        m << planes[a].normal.transpose(), planes[b].normal.transpose(), along.transpose();
-        const Eigen::Vector3d on_line =
-            m.colPivHouseholderQr().solve(Eigen::Vector3d(-planes[a].offset, -planes[b].offset, 0.0));
-        std::vector<std::size_t> through_line{a, b};
-        std::vector<std::pair<double, std::size_t>> crossings;  // (position along the line, plane)
         for (std::size_t c = 0; c < n; ++c) {
-          if (c == a || c == b) continue;
-          const double slope = planes[c].normal.dot(along);
-          const double distance = planes[c].signedDistance(on_line);
-          if (std::abs(slope) < 1e-3) {
-            if (std::abs(distance) < kConcurrencyTolerance) through_line.push_back(c);
-          } else {
-            crossings.emplace_back(-distance / slope, c);
+          if (c == a || c == b || std::abs(planes[c].normal.dot(direction.normalized())) > 1e-3) continue;
+          Eigen::Matrix3d m;
+          m << planes[a].normal.transpose(), planes[b].normal.transpose(), direction.normalized().transpose();
+          const Eigen::Vector3d on_line =
+              m.colPivHouseholderQr().solve(Eigen::Vector3d(-planes[a].offset, -planes[b].offset, 0.0));
+          auto met = [&] { return std::abs(planes[c].signedDistance(on_line)) < kConcurrencyTolerance; };
+          if (!box.contains(on_line) || !met()) continue;
+          if (separate({a, b, c}, c, met)) ++shifts;
+        }
+        // Four planes through one point: d within the tolerance of the vertex of a, b, c.
+        for (std::size_t c = b + 1; c < n; ++c) {
+          Eigen::Vector3d x;
+          if (!vertexOf(a, b, c, x)) continue;
+          for (std::size_t d = 0; d < n; ++d) {
+            if (d == a || d == b || d == c || std::abs(planes[d].signedDistance(x)) >= kConcurrencyTolerance) continue;
+            auto met = [&] {
+              Eigen::Vector3d y;
+              return vertexOf(a, b, c, y) && std::abs(planes[d].signedDistance(y)) < kConcurrencyTolerance;
+            };
+            if (separate({a, b, c, d}, d, met)) ++shifts;
+            if (!vertexOf(a, b, c, x)) break;
           }
         }
-        std::vector<std::size_t> meeting;
-        if (through_line.size() >= 3) {
-          meeting = through_line;
-        } else {
-          std::sort(crossings.begin(), crossings.end());
-          for (std::size_t i = 0; i + 1 < crossings.size() && meeting.empty(); ++i) {
-            const Eigen::Vector3d x = on_line + crossings[i].first * along;
-            if (std::abs(planes[crossings[i + 1].second].signedDistance(x)) < kConcurrencyTolerance)
-              meeting = {a, b, crossings[i].second, crossings[i + 1].second};
-          }
-        }
-        if (meeting.empty()) continue;
-        shift(weakest(meeting));
-        ++shifts;
       }
     if (shifts == shifts_before) break;
   }

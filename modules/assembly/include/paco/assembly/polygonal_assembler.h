@@ -74,8 +74,8 @@ struct AssemblyResult {
   int num_crossings_resolved = 0;      ///< cell-complex: cells relabelled to remove non-manifold "X" edges
   std::size_t num_variables = 0, num_constraints = 0;  ///< polyfit: size of the MIP
   std::size_t num_warm_start_faces = 0;  ///< polyfit: candidate faces of the cell-complex start (0: none given)
-  /// polyfit: planes shifted by 2e-4 of the diagonal so that no four meet in one point and no
-  /// three share a line (CGAL's PolyFit forbids every face around such a meeting).
+  /// polyfit: shifts of a plane by 5e-5 of the diagonal, made so that no four planes meet in one
+  /// point and no three share a line (CGAL's PolyFit forbids every face around such a meeting).
   std::size_t num_planes_separated = 0;
   /// polyfit: start faces around candidate edges that PolyFit's program forbids to the start
   /// (three planes through one line, or four selected faces at an edge), left to the solver.
