@@ -15,10 +15,10 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
-#include <map>
 #include <cmath>
 #include <chrono>
+#include <limits>
+#include <map>
 #include <memory>
 #include <tuple>
 #include <vector>

@@ -12,8 +12,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -117,18 +117,21 @@ std::size_t separateConcurrentPlanes(std::vector<PlanarPrimitive>& primitives) {
     const std::size_t shifts_before = shifts;
     for (std::size_t a = 0; a < n; ++a)
       for (std::size_t b = a + 1; b < n; ++b) {
-        // Three planes through one line: c within the tolerance of two points of the line of a, b.
+        // Three planes through one line: c parallel to the line of a and b, and within the
+        // tolerance of it (at its point nearest the origin, inside the box).
         const Eigen::Vector3d direction = planes[a].normal.cross(planes[b].normal);
         if (direction.norm() < 1e-3) continue;  // (nearly) parallel: no line
+        const Eigen::Vector3d along = direction.normalized();
         for (std::size_t c = 0; c < n; ++c) {
-          if (c == a || c == b || std::abs(planes[c].normal.dot(direction.normalized())) > 1e-3) continue;
-          Eigen::Matrix3d m;
-          m << planes[a].normal.transpose(), planes[b].normal.transpose(), direction.normalized().transpose();
-          const Eigen::Vector3d on_line =
-              m.colPivHouseholderQr().solve(Eigen::Vector3d(-planes[a].offset, -planes[b].offset, 0.0));
-          auto met = [&] { return std::abs(planes[c].signedDistance(on_line)) < kConcurrencyTolerance; };
-          if (!box.contains(on_line) || !met()) continue;
-          if (separate({a, b, c}, c, met)) ++shifts;
+          if (c == a || c == b || std::abs(planes[c].normal.dot(along)) > 1e-3) continue;
+          auto met = [&] {
+            Eigen::Matrix3d m;
+            m << planes[a].normal.transpose(), planes[b].normal.transpose(), along.transpose();
+            const Eigen::Vector3d on_line =
+                m.colPivHouseholderQr().solve(Eigen::Vector3d(-planes[a].offset, -planes[b].offset, 0.0));
+            return box.contains(on_line) && std::abs(planes[c].signedDistance(on_line)) < kConcurrencyTolerance;
+          };
+          if (met() && separate({a, b, c}, c, met)) ++shifts;
         }
         // Four planes through one point: d within the tolerance of the vertex of a, b, c.
         for (std::size_t c = b + 1; c < n; ++c) {
