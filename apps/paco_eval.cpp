@@ -48,6 +48,9 @@ struct Options {
   double time_limit = 60.0;
   std::size_t max_candidate_faces = paco::evaluation::MethodOptions().max_candidate_faces;
   bool no_warm_start = false;
+  double fitting = paco::evaluation::MethodOptions().polyfit_fitting;
+  double coverage = paco::evaluation::MethodOptions().polyfit_coverage;
+  double complexity = paco::evaluation::MethodOptions().polyfit_complexity;
   bool dataset_labels = false;
   std::size_t max_points = paco::evaluation::MethodOptions().max_input_points;
   bool quiet = false;
@@ -196,6 +199,11 @@ int dataset(const Options& o) {
   b.method.time_limit = o.time_limit;
   b.method.max_candidate_faces = o.max_candidate_faces;
   b.method.polyfit_warm_start = !o.no_warm_start;
+  if (!(o.fitting >= 0.0 && o.coverage >= 0.0 && o.complexity >= 0.0) || o.fitting + o.coverage + o.complexity <= 0.0)
+    throw paco::app::UsageError("--fitting, --coverage and --complexity must be >= 0 and not all 0");
+  b.method.polyfit_fitting = o.fitting;
+  b.method.polyfit_coverage = o.coverage;
+  b.method.polyfit_complexity = o.complexity;
   b.method.segmenter = o.segmenter;
   b.method.segment_min_points = o.segment_min_points;
   b.method.segment_min_parallel_points = o.segment_min_parallel_points;
@@ -263,6 +271,9 @@ int run(int argc, char** argv) {
       ("max-candidate-faces", po::value(&o.max_candidate_faces)->default_value(o.max_candidate_faces),
        "polyfit: leave out the least confident predicted primitives until the candidate faces fit (0: no limit)")
       ("no-warm-start", po::bool_switch(&o.no_warm_start), "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
+      ("fitting", po::value(&o.fitting)->default_value(o.fitting, "0.43"), "polyfit data-fitting weight (>= 0)")
+      ("coverage", po::value(&o.coverage)->default_value(o.coverage, "0.27"), "polyfit coverage weight (>= 0)")
+      ("complexity", po::value(&o.complexity)->default_value(o.complexity, "0.30"), "polyfit complexity weight (>= 0)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco")
       ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the input's points, at least 3)")
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),

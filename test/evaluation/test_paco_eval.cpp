@@ -110,4 +110,13 @@ TEST(PacoEvalTool, SingleModeRejectsBadInput) {
             2)
       << out;
   EXPECT_NE(out.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << out;
+  // PolyFit weights that are negative, or all 0.
+  for (const std::string weights : {" --coverage=-0.1", " --fitting 0 --coverage 0 --complexity 0"}) {
+    EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --dataset " + quoted(dir.file("none")) +
+                                         " -o " + quoted(dir.file("out")) + weights,
+                                     &out),
+              2)
+        << weights << ": " << out;
+    EXPECT_NE(out.find("must be >= 0 and not all 0"), std::string::npos) << out;
+  }
 }

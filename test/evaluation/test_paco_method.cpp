@@ -1,6 +1,7 @@
 // The `paco` evaluation method: the full pipeline (segment, encode, complete, assemble) with a
 // model file, in both frames. An untrained tiny model is enough to check the wiring and the
 // failure accounting; the quality of a trained model is measured by paco_eval (doc/results.md).
+#include <paco/assembly/polygonal_assembler.h>
 #include <paco/common/error.h>
 #include <paco/completion/checkpoint.h>
 #include <paco/completion/observed_fusion.h>
@@ -145,4 +146,8 @@ TEST(PacoMethod, DefaultsAreTheLibrarys) {
   EXPECT_EQ(method.fill_box_spacing, fusion.fill_spacing);
   EXPECT_EQ(method.unseen_point_fraction, fusion.unseen_point_fraction);
   EXPECT_EQ(method.contradiction_radius, fusion.contradiction_radius);
+  const paco::PolygonalAssembler assembler;
+  EXPECT_EQ(method.polyfit_fitting, assembler.getFittingWeight());
+  EXPECT_EQ(method.polyfit_coverage, assembler.getCoverageWeight());
+  EXPECT_EQ(method.polyfit_complexity, assembler.getComplexityWeight());
 }

@@ -140,6 +140,9 @@ std::map<std::string, Entry>& registry() {
   assembler.setTimeLimit(options.time_limit);
   assembler.setMaxCandidateFaces(options.max_candidate_faces);
   assembler.setWarmStart(options.polyfit_warm_start);
+  assembler.setFittingWeight(options.polyfit_fitting);
+  assembler.setCoverageWeight(options.polyfit_coverage);
+  assembler.setComplexityWeight(options.polyfit_complexity);
   assembler.setInputPrimitives(primitives);
   SurfaceMesh mesh;
   const auto start = std::chrono::steady_clock::now();
