@@ -67,15 +67,13 @@ double windingNumber(const SurfaceMesh& solid, const Eigen::Vector3d& x) {
   return total / (4.0 * 3.14159265358979323846);
 }
 
-// 1 for each candidate face (in CGAL's order, which is the order of its face variables) that
-// separates the inside of `solid` from its outside, 0 otherwise. `back` turns candidate
+// 1 for each of CGAL's candidate faces (in its order, which is the order of its face variables)
+// that separates the inside of `solid` from its outside, 0 otherwise. `back` turns candidate
 // coordinates into the solid's frame.
-std::vector<double> facesOnSolidBoundary(const Reconstruction& reconstruction, const SurfaceMesh& solid,
+std::vector<double> facesOnSolidBoundary(const CgalMesh& candidates, const SurfaceMesh& solid,
                                          const Eigen::Matrix3d& back) {
   // Far below the spacing of distinct planes (the frame has unit diagonal), far above rounding.
   constexpr double kProbe = 1e-5;
-  CgalMesh candidates;
-  reconstruction.output_candidate_faces(candidates);
   std::vector<double> selected;
   selected.reserve(candidates.number_of_faces());
   for (auto f : candidates.faces()) {
@@ -253,9 +251,9 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   mipSettings().seconds = left;
   mipSettings().verbose = options.verbose;
   if (options.start_solid && !options.start_solid->faces.empty()) {
-    mipSettings().start = facesOnSolidBoundary(*reconstruction, *options.start_solid, rotation.transpose());
     CgalMesh candidates;
     reconstruction->output_candidate_faces(candidates);
+    mipSettings().start = facesOnSolidBoundary(candidates, *options.start_solid, rotation.transpose());
     outcome.start_faces_released = releaseFacesAtForbiddenEdges(candidates, mipSettings().start, kReleaseRings);
     outcome.start_faces =
         static_cast<std::size_t>(std::count(mipSettings().start.begin(), mipSettings().start.end(), 1.0));

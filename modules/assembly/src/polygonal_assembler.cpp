@@ -86,13 +86,11 @@ std::size_t separateConcurrentPlanes(std::vector<PlanarPrimitive>& primitives) {
     x = m.partialPivLu().solve(Eigen::Vector3d(-planes[a].offset, -planes[b].offset, -planes[c].offset));
     return box.contains(x);
   };
+  // The search moves the planes only; their points follow once, by each plane's net shift.
   std::vector<int> times_shifted(n, 0);
   auto shift = [&](std::size_t k, double sign) {
     times_shifted[k] += sign > 0 ? 1 : -1;
     planes[k].offset -= sign * kSeparation;
-    primitives[k].plane.offset -= sign * kSeparation;
-    const Eigen::Vector3f step = (sign * kSeparation * planes[k].normal).cast<float>();
-    for (auto& p : primitives[k].points) p.x += step.x(), p.y += step.y(), p.z += step.z();
   };
   // Moves the least supported plane of a meeting if that separates it, else `fallback`, which
   // always does (it is the plane measured against the others' point or line).
@@ -149,6 +147,13 @@ std::size_t separateConcurrentPlanes(std::vector<PlanarPrimitive>& primitives) {
         }
       }
     if (shifts == shifts_before) break;
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    if (times_shifted[k] == 0) continue;
+    const double distance = times_shifted[k] * kSeparation;
+    primitives[k].plane.offset -= distance;
+    const Eigen::Vector3f step = (distance * planes[k].normal).cast<float>();
+    for (auto& p : primitives[k].points) p.x += step.x(), p.y += step.y(), p.z += step.z();
   }
   return shifts;
 }
