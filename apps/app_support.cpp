@@ -88,12 +88,13 @@ std::string shortNumber(double value) {
 }
 
 FusionFlags::FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing,
-                         double unseen_point_fraction, double contradiction_radius)
+                         double unseen_point_fraction, double contradiction_radius, double join_distance)
     : align_unseen_degrees(align_unseen_degrees),
       clip_margin(std::isinf(clip_margin) ? "off" : shortNumber(clip_margin)),
       fill_box_spacing(fill_box_spacing),
       unseen_point_fraction(unseen_point_fraction),
-      contradiction_radius(contradiction_radius) {}
+      contradiction_radius(contradiction_radius),
+      join_distance(join_distance) {}
 
 void FusionFlags::addTo(boost::program_options::options_description& options) {
   namespace po = boost::program_options;
@@ -108,7 +109,10 @@ void FusionFlags::addTo(boost::program_options::options_description& options) {
        "with fusion: the fraction of the network's points that unseen primitives keep, in (0, 1] (1: all)")
       ("contradiction-radius", po::value(&contradiction_radius)->default_value(contradiction_radius, shortNumber(contradiction_radius)),
        "with fusion: drop the network's points of a seen face where the scan, within this fraction of the diagonal, "
-       "saw no such face or shows solid (0: off)");
+       "saw no such face or shows solid (0: off)")
+      ("join-distance", po::value(&join_distance)->default_value(join_distance, shortNumber(join_distance)),
+       "with fusion: a seen segment joins another seen face's primitive only when its points lie this close to "
+       "that face's plane on average (fraction of the diagonal); a parallel face farther off keeps its own plane");
 }
 
 void FusionFlags::validate() const {
@@ -124,6 +128,9 @@ void FusionFlags::validate() const {
   if (!(contradiction_radius >= 0.0 && contradiction_radius < 1.0))
     throw UsageError("--contradiction-radius must be 0 (off) or in (0, 1) (a fraction of the diagonal), got " +
                      std::to_string(contradiction_radius));
+  if (!(join_distance >= 0.0 && join_distance < 1.0))
+    throw UsageError("--join-distance must be in [0, 1) (a fraction of the diagonal), got " +
+                     std::to_string(join_distance));
   parseNonNegativeOrOff("--clip-margin", clip_margin);
 }
 

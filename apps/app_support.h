@@ -50,16 +50,17 @@ void validateNoiseAdaptation(double multiple);
 /// module), so that they are written once.
 struct FusionFlags {
   FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing, double unseen_point_fraction,
-              double contradiction_radius);
+              double contradiction_radius, double join_distance);
 
   double align_unseen_degrees;
   std::string clip_margin;  ///< a number, or "off" (infinity)
   double fill_box_spacing;
   double unseen_point_fraction;
   double contradiction_radius;
+  double join_distance;
 
-  /// Adds --align-unseen, --clip-margin, --fill-box, --unseen-points and --contradiction-radius,
-  /// bound to the fields above.
+  /// Adds --align-unseen, --clip-margin, --fill-box, --unseen-points, --contradiction-radius and
+  /// --join-distance, bound to the fields above.
   void addTo(boost::program_options::options_description& options);
   /// Throws UsageError when a value is out of range.
   void validate() const;

@@ -26,7 +26,7 @@ namespace paco::app {
 inline FusionFlags libraryFusionFlags() {
   const ObservedFusionOptions defaults;
   return FusionFlags(defaults.align_unseen_degrees, defaults.clip_margin, defaults.fill_spacing,
-                     defaults.unseen_point_fraction, defaults.contradiction_radius);
+                     defaults.unseen_point_fraction, defaults.contradiction_radius, defaults.join_distance);
 }
 
 /// "complete: N primitives with confidence > T", how many turns voted, and how far the scan was
@@ -130,6 +130,7 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
   options.fill_spacing = flags.fill_box_spacing;
   options.unseen_point_fraction = flags.unseen_point_fraction;
   options.contradiction_radius = flags.contradiction_radius;
+  options.join_distance = flags.join_distance;
   options.known_extent_points = known_extent;
   primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), options, &report);
   timer.stop();

@@ -31,7 +31,7 @@ const char kTool[] = "paco_eval";
 
 paco::app::FusionFlags fusionFlagsOf(const ev::MethodOptions& method) {
   return {method.align_unseen_degrees, method.clip_margin, method.fill_box_spacing, method.unseen_point_fraction,
-          method.contradiction_radius};
+          method.contradiction_radius, method.join_distance};
 }
 
 struct Options {
@@ -229,6 +229,7 @@ int dataset(const Options& o) {
   b.method.fill_box_spacing = o.fusion.fill_box_spacing;
   b.method.unseen_point_fraction = o.fusion.unseen_point_fraction;
   b.method.contradiction_radius = o.fusion.contradiction_radius;
+  b.method.join_distance = o.fusion.join_distance;
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
   b.method.known_extent_oracle = o.known_extent_oracle;

@@ -116,6 +116,46 @@ TEST(ObservedFusion, ASplitObservedFaceJoinsOnePrimitiveAndTinySegmentsAreIgnore
   EXPECT_NEAR(fused[0].plane.signedDistance({0, 0, 0}), 0.0, 1e-12);
 }
 
+TEST(ObservedFusion, WithASmallJoinDistanceAParallelSeenFaceOffTheSnappedPlaneKeepsItsOwnPlane) {
+  // Seen: a floor y = 0 (81 points) and a step y = 0.03 beside it (36 points), both within the
+  // matching distance (0.02 of the diagonal, about 0.05 here) of the one prediction y = 0.01.
+  // The floor takes the prediction; the step is 0.03 off that plane, beyond join_distance
+  // set to 0.005 (about 0.012 here), so it stays a face of its own instead of being flattened
+  // into the floor. With the default join_distance, the matching distance, it joins the floor.
+  const Plane floor = Plane::fromPointAndNormal({0, 0, 0}, {0, 1, 0});
+  const Plane step = Plane::fromPointAndNormal({0, 0.03, 0}, {0, 1, 0});
+  const std::vector<PlanarPrimitive> observed = {patch(floor, {-0.6, 0, 0}, 1.0, 9, 1.0f),
+                                                 patch(step, {0.6, 0.03, 0}, 1.0, 6, 1.0f)};
+  const std::vector<PlanarPrimitive> completed = {
+      patch(Plane::fromPointAndNormal({0, 0.01, 0}, {0, 1, 0}), {0, 0.01, 0}, 2.0, 5, 0.95f)};
+  ObservedFusionOptions apart = fusionOnly();
+  apart.join_distance = 0.005;
+  ObservedFusionReport report;
+  auto fused = fuseWithObserved(completed, observed, apart, &report);
+  ASSERT_EQ(fused.size(), 2u);
+  EXPECT_EQ(report.snapped, 1u);
+  EXPECT_EQ(report.joined, 0u);
+  EXPECT_EQ(report.added, 1u);
+  EXPECT_NEAR(fused[0].plane.signedDistance({0, 0, 0}), 0.0, 1e-12);
+  EXPECT_EQ(fused[0].points.size(), 25u + 81u);
+  EXPECT_NEAR(fused[1].plane.signedDistance({0, 0.03, 0}), 0.0, 1e-12);
+  EXPECT_EQ(fused[1].points.size(), 36u);
+  EXPECT_FLOAT_EQ(fused[1].confidence, 1.0f);
+
+  ObservedFusionOptions before = fusionOnly();
+  EXPECT_EQ(before.join_distance, before.max_distance);
+  fused = fuseWithObserved(completed, observed, before, &report);
+  ASSERT_EQ(fused.size(), 1u);
+  EXPECT_EQ(report.joined, 1u);
+  EXPECT_EQ(fused[0].points.size(), 25u + 81u + 36u);
+  EXPECT_NE(describe(report).find("1 seen segments joined a larger seen face"), std::string::npos) << describe(report);
+
+  for (double bad : {-0.01, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    before.join_distance = bad;
+    EXPECT_THROW(fuseWithObserved(completed, observed, before), InvalidInputError);
+  }
+}
+
 TEST(ObservedFusion, DuplicatePredictionsOfASeenFaceAreAbsorbed) {
   // Two predictions of the seen face z = 0 (one 2° and 0.01 off, one 4° and 0.015 off) and one of
   // the unseen face z = 1: the seen face ends up once, with the points of both duplicates.

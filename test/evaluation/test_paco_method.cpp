@@ -146,6 +146,7 @@ TEST(PacoMethod, DefaultsAreTheLibrarys) {
   EXPECT_EQ(method.fill_box_spacing, fusion.fill_spacing);
   EXPECT_EQ(method.unseen_point_fraction, fusion.unseen_point_fraction);
   EXPECT_EQ(method.contradiction_radius, fusion.contradiction_radius);
+  EXPECT_EQ(method.join_distance, fusion.join_distance);
   const paco::PolygonalAssembler assembler;
   EXPECT_EQ(method.polyfit_fitting, assembler.getFittingWeight());
   EXPECT_EQ(method.polyfit_coverage, assembler.getCoverageWeight());

@@ -438,6 +438,7 @@ std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const
 std::string describe(const ObservedFusionReport& report) {
   return std::to_string(report.snapped) + " primitives took a seen plane, " + std::to_string(report.absorbed) +
          " duplicates absorbed, " + std::to_string(report.added) + " seen faces added" +
+         (report.joined ? ", " + std::to_string(report.joined) + " seen segments joined a larger seen face" : "") +
          (report.aligned ? ", " + std::to_string(report.aligned) + " unseen aligned with seen directions" : "") +
          (report.clipped_points ? ", " + std::to_string(report.clipped_points) + " points outside the seen box dropped (" +
                                       std::to_string(report.clipped) + " unseen primitives with them)"
@@ -465,13 +466,14 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
                                               const ObservedFusionOptions& options, ObservedFusionReport* report) {
   if (!std::isfinite(options.max_angle_degrees) || options.max_angle_degrees < 0.0 ||
       !std::isfinite(options.max_distance) || options.max_distance < 0.0 ||
+      !std::isfinite(options.join_distance) || options.join_distance < 0.0 ||
       !std::isfinite(options.align_unseen_degrees) || options.align_unseen_degrees < 0.0 ||
       std::isnan(options.clip_margin) || options.clip_margin < 0.0 || !std::isfinite(options.fill_spacing) ||
       options.fill_spacing < 0.0 || !std::isfinite(options.fill_empty_radius) || options.fill_empty_radius < 0.0 ||
       !std::isfinite(options.contradiction_radius) || options.contradiction_radius < 0.0 ||
       !(options.unseen_point_fraction > 0.0 && options.unseen_point_fraction <= 1.0))
     throw InvalidInputError(
-        "fuseWithObserved: max_angle_degrees, max_distance, align_unseen_degrees, fill_spacing, "
+        "fuseWithObserved: max_angle_degrees, max_distance, join_distance, align_unseen_degrees, fill_spacing, "
         "fill_empty_radius and contradiction_radius must be finite and >= 0, clip_margin >= 0 (infinity = off), "
         "unseen_point_fraction in (0, 1]");
   // Six faces of (1/spacing)^2 grid points each: below 0.001 that is millions of points.
@@ -485,6 +487,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   ObservedFusionReport counts;
   const double max_angle = options.max_angle_degrees * kPi / 180.0;
   const double max_distance = options.max_distance * diagonalOf(observed);
+  const double join_distance = options.join_distance * diagonalOf(observed);
 
   std::vector<std::size_t> order(observed.size());
   std::iota(order.begin(), order.end(), 0);
@@ -508,7 +511,8 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (absorbed[c] || completed[c].plane.unorientedAngleTo(seen.plane) > max_angle) continue;
       const double d = meanDistance(seen.points, completed[c].plane);
-      if (d > max_distance) continue;
+      // A snapped primitive's plane is a seen face's: only the rest of that face may join it.
+      if (d > max_distance || (snapped[c] && d > join_distance)) continue;
       matches.push_back(c);
       if (d < best_distance) {
         best = c;

@@ -274,6 +274,7 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     fusion.fill_spacing = options.fill_box_spacing;
     fusion.unseen_point_fraction = options.unseen_point_fraction;
     fusion.contradiction_radius = options.contradiction_radius;
+    fusion.join_distance = options.join_distance;
     if (options.known_extent_oracle) fusion.known_extent_points = positionsOf(in.gt_points);
     primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation), fusion);
     out.seconds["fuse"] = secondsSince(fuse_start);

@@ -111,6 +111,8 @@ struct MethodOptions {
   double unseen_point_fraction = 0.25;
   /// paco, with fusion: paco::ObservedFusionOptions::contradiction_radius (0 = off).
   double contradiction_radius = 0.03;
+  /// paco, with fusion: paco::ObservedFusionOptions::join_distance.
+  double join_distance = 0.02;
   /// paco, with fusion: give the box fill the GT's points as the object's known extent
   /// (paco::ObservedFusionOptions::known_extent_points). An oracle for analysis: what the
   /// pipeline scores when the part's extent is known (default false).
