@@ -511,7 +511,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (absorbed[c] || completed[c].plane.unorientedAngleTo(seen.plane) > max_angle) continue;
       const double d = meanDistance(seen.points, completed[c].plane);
-      // A snapped primitive's plane is a seen face's: only the rest of that face may join it.
+      // A snapped primitive's plane is a seen face's: another segment joins it only within join_distance.
       if (d > max_distance || (snapped[c] && d > join_distance)) continue;
       matches.push_back(c);
       if (d < best_distance) {
