@@ -272,9 +272,12 @@ int run(int argc, char** argv) {
       ("max-candidate-faces", po::value(&o.max_candidate_faces)->default_value(o.max_candidate_faces),
        "polyfit: leave out the least confident predicted primitives until the candidate faces fit (0: no limit)")
       ("no-warm-start", po::bool_switch(&o.no_warm_start), "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
-      ("fitting", po::value(&o.fitting)->default_value(o.fitting, "0.43"), "polyfit data-fitting weight (>= 0)")
-      ("coverage", po::value(&o.coverage)->default_value(o.coverage, "0.27"), "polyfit coverage weight (>= 0)")
-      ("complexity", po::value(&o.complexity)->default_value(o.complexity, "0.30"), "polyfit complexity weight (>= 0)")
+      ("fitting", po::value(&o.fitting)->default_value(o.fitting, paco::app::shortNumber(o.fitting)),
+       "polyfit data-fitting weight (>= 0)")
+      ("coverage", po::value(&o.coverage)->default_value(o.coverage, paco::app::shortNumber(o.coverage)),
+       "polyfit coverage weight (>= 0)")
+      ("complexity", po::value(&o.complexity)->default_value(o.complexity, paco::app::shortNumber(o.complexity)),
+       "polyfit complexity weight (>= 0)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco")
       ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the input's points, at least 3)")
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),

@@ -250,9 +250,10 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   mipSettings() = MipSettings{};
   mipSettings().seconds = left;
   mipSettings().verbose = options.verbose;
+  // The candidate faces, copied once for the start and the count (reconstruct() leaves them as they are).
+  CgalMesh candidates;
+  reconstruction->output_candidate_faces(candidates);
   if (options.start_solid && !options.start_solid->faces.empty()) {
-    CgalMesh candidates;
-    reconstruction->output_candidate_faces(candidates);
     mipSettings().start = facesOnSolidBoundary(candidates, *options.start_solid, rotation.transpose());
     outcome.start_faces_released = releaseFacesAtForbiddenEdges(candidates, mipSettings().start, kReleaseRings);
     outcome.start_faces =
@@ -273,7 +274,7 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   outcome.hit_time_limit = mip.hit_time_limit;
   outcome.num_variables = mip.num_variables;
   outcome.num_constraints = mip.num_constraints;
-  outcome.num_candidate_faces = countCandidates(*reconstruction);
+  outcome.num_candidate_faces = static_cast<std::size_t>(candidates.number_of_faces());
   if (!solved) {
     const bool timed_out = mip.hit_time_limit && !mip.has_solution;
     outcome.status = timed_out ? AssemblyStatus::TimeLimit : AssemblyStatus::SolverFailed;
