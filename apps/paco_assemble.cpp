@@ -22,9 +22,7 @@ namespace po = boost::program_options;
 namespace {
 
 const std::string kTool = "paco_assemble";
-const std::string kDefaultBackend = "polyfit";
-const std::string kDefaultSolver = "cbc";
-constexpr double kDefaultTimeLimit = 60.0;
+constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
 
 void printHelp(const po::options_description& options) {
   std::cout << "Usage: " << kTool << " PRIMITIVES -o MESH [options]\n\n"
@@ -77,26 +75,36 @@ std::vector<paco::PlanarPrimitive> loadPrimitives(const std::string& path) {
 }
 
 int run(int argc, char** argv) {
-  std::string input, output, backend = kDefaultBackend, solver = kDefaultSolver;
-  double time_limit = kDefaultTimeLimit, fitting = 0.43, coverage = 0.27, complexity = 0.30, smoothness = 0.2;
-  std::size_t min_support = 10, max_candidate_faces = paco::PolygonalAssembler::kDefaultMaxCandidateFaces;
-  double merge_distance = 0.005, merge_angle = 2.0;
+  // The library's defaults, so that the help and the tool cannot drift from them.
+  const paco::PolygonalAssembler defaults;
+  std::string input, output;
+  std::string backend = paco::toString(defaults.getBackend()), solver = paco::toString(defaults.getMipSolver());
+  double time_limit = defaults.getTimeLimit(), fitting = defaults.getFittingWeight(),
+         coverage = defaults.getCoverageWeight(), complexity = defaults.getComplexityWeight(),
+         smoothness = defaults.getSmoothness();
+  std::size_t min_support = defaults.getMinSupport(), max_candidate_faces = defaults.getMaxCandidateFaces();
+  double merge_distance = defaults.getMergeDistance(), merge_angle = defaults.getMergeAngle() / kRadiansPerDegree;
+  using paco::app::shortNumber;
   po::options_description options("Options");
   options.add_options()
       ("help,h", "print this help and exit")
       ("output,o", po::value(&output), "output mesh (.obj, .off, .ply)")
-      ("backend,b", po::value(&backend)->default_value(kDefaultBackend), "polyfit | cell-complex")
-      ("solver", po::value(&solver)->default_value(kDefaultSolver), "MIP solver of polyfit: cbc | glpk")
-      ("time-limit", po::value(&time_limit)->default_value(kDefaultTimeLimit, "60"),
+      ("backend,b", po::value(&backend)->default_value(backend), "polyfit | cell-complex")
+      ("solver", po::value(&solver)->default_value(solver), "MIP solver of polyfit: cbc | glpk")
+      ("time-limit", po::value(&time_limit)->default_value(time_limit, shortNumber(time_limit)),
        "time budget in seconds; polyfit keeps the best solution found by then")
-      ("fitting", po::value(&fitting)->default_value(0.43, "0.43"), "polyfit data-fitting weight (>= 0)")
-      ("coverage", po::value(&coverage)->default_value(0.27, "0.27"), "polyfit coverage weight (>= 0)")
-      ("complexity", po::value(&complexity)->default_value(0.30, "0.30"), "polyfit complexity weight (>= 0)")
-      ("smoothness", po::value(&smoothness)->default_value(0.2, "0.2"), "cell-complex area weight (> 0)")
-      ("min-support", po::value(&min_support)->default_value(10), "drop primitives with fewer points (>= 3)")
-      ("merge-angle", po::value(&merge_angle)->default_value(2.0, "2"),
+      ("fitting", po::value(&fitting)->default_value(fitting, shortNumber(fitting)),
+       "polyfit data-fitting weight (>= 0)")
+      ("coverage", po::value(&coverage)->default_value(coverage, shortNumber(coverage)),
+       "polyfit coverage weight (>= 0)")
+      ("complexity", po::value(&complexity)->default_value(complexity, shortNumber(complexity)),
+       "polyfit complexity weight (>= 0)")
+      ("smoothness", po::value(&smoothness)->default_value(smoothness, shortNumber(smoothness)),
+       "cell-complex area weight (> 0)")
+      ("min-support", po::value(&min_support)->default_value(min_support), "drop primitives with fewer points (>= 3)")
+      ("merge-angle", po::value(&merge_angle)->default_value(merge_angle, shortNumber(merge_angle)),
        "merge near-duplicate planes closer than this angle (degrees) ...")
-      ("merge-distance", po::value(&merge_distance)->default_value(0.005, "0.005"),
+      ("merge-distance", po::value(&merge_distance)->default_value(merge_distance, shortNumber(merge_distance)),
        "... and this mean point distance (fraction of the diagonal; 0: never merge)")
       ("max-candidate-faces", po::value(&max_candidate_faces)->default_value(max_candidate_faces),
        "polyfit: leave out the least confident primitives (confidence < 1) until the candidate faces fit (0: no limit)")
@@ -127,7 +135,7 @@ int run(int argc, char** argv) {
     assembler.setComplexityWeight(complexity);
     assembler.setSmoothness(smoothness);
     assembler.setMinSupport(min_support);
-    assembler.setMergeAngle(merge_angle * 3.14159265358979323846 / 180.0);
+    assembler.setMergeAngle(merge_angle * kRadiansPerDegree);
     assembler.setMergeDistance(merge_distance);
     assembler.setMaxCandidateFaces(max_candidate_faces);
   } catch (const paco::InvalidInputError& e) {

@@ -362,6 +362,71 @@ TEST(PolyFit, WarmStartIsTheCellComplexSurfaceAndKeepsTheOptimum) {
   }
 }
 
+// The plane x[axis] = at with outward normal sign * e_axis, and `count` points spread at random
+// over the box [lo, hi]'s cross-section there.
+PlanarPrimitive coveredAxisPlane(int axis, double at, double sign, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                                 int count, std::mt19937& random) {
+  const Eigen::Vector3d n = sign * Eigen::Vector3d::Unit(axis);
+  PlanarPrimitive primitive;
+  primitive.plane = paco::Plane(n, -n[axis] * at);
+  for (int i = 0; i < count; ++i) {
+    Eigen::Vector3d x;
+    for (int k = 0; k < 3; ++k) x[k] = std::uniform_real_distribution<double>(lo[k], hi[k])(random);
+    x[axis] = at;
+    pcl::PointNormal p;
+    p.getVector3fMap() = x.cast<float>();
+    p.getNormalVector3fMap() = n.cast<float>();
+    primitive.points.push_back(p);
+  }
+  return primitive;
+}
+
+// Planes of a unit cube plus `inner` planes per axis at random offsets, each with points over the
+// whole cube's cross-section (floors and walls of a building, say). Nearly every edge of the cell
+// complex's surface then has four candidate faces around it, which PolyFit's program forbids, so
+// its start is mostly released; with 6 inner planes CBC finds no solution in 10 s.
+std::vector<PlanarPrimitive> latticeOfCoveredPlanes(int inner, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> offset(0.05, 0.95);
+  std::vector<PlanarPrimitive> primitives;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> offsets = {0.0, 1.0};
+    for (int k = 0; k < inner; ++k) offsets.push_back(offset(random));
+    for (double at : offsets)
+      primitives.push_back(
+          coveredAxisPlane(axis, at, 1.0, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 150, random));
+  }
+  return primitives;
+}
+
+TEST(PolyFit, ATimeOutReturnsTheWarmStartsSurface) {
+  const std::vector<PlanarPrimitive> primitives = latticeOfCoveredPlanes(6, 2);
+  auto assemble = [&](const std::string& backend, bool warm_start, SurfaceMesh& mesh) {
+    paco::PolygonalAssembler assembler;
+    assembler.setInputPrimitives(primitives);
+    assembler.setBackend(backend);
+    assembler.setWarmStart(warm_start);
+    assembler.setMaxCandidateFaces(0);  // all of them, so that the program stays too hard
+    assembler.setTimeLimit(4.0);        // the start gets at most half, and needs a fraction of that
+    return assembler.reconstruct(mesh);
+  };
+  SurfaceMesh cell_complex_mesh, mesh;
+  const paco::AssemblyResult cell_complex = assemble("cell-complex", false, cell_complex_mesh);
+  ASSERT_TRUE(cell_complex.ok()) << cell_complex.message;
+
+  const paco::AssemblyResult polyfit = assemble("polyfit", true, mesh);
+  ASSERT_TRUE(polyfit.ok()) << paco::toString(polyfit.status) << ": " << polyfit.message;
+  EXPECT_TRUE(polyfit.returned_warm_start);
+  EXPECT_TRUE(polyfit.hit_time_limit);
+  EXPECT_GT(polyfit.num_warm_start_faces_released, polyfit.num_warm_start_faces);
+  EXPECT_NE(polyfit.message.find("warm start"), std::string::npos) << polyfit.message;
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  // The start is the cell complex on the same planes, refitted to their points; it relabels the
+  // cells at edges with four faces, so its solid may differ from the backend's by a few cells.
+  const double cell_complex_volume = paco::signedVolume(cell_complex_mesh);
+  EXPECT_NEAR(paco::signedVolume(mesh), cell_complex_volume, 0.03 * cell_complex_volume);
+}
+
 // A box and a small patch of a plane that touches it only at one corner (or along one edge).
 std::vector<PlanarPrimitive> boxWithAPlaneThrough(const Eigen::Vector3d& normal, const Eigen::Vector3d& corner,
                                                   const std::function<Eigen::Vector3d(double, double)>& patch_point) {
@@ -370,23 +435,8 @@ std::vector<PlanarPrimitive> boxWithAPlaneThrough(const Eigen::Vector3d& normal,
   std::mt19937 random(7);
   std::vector<PlanarPrimitive> primitives;
   for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      Eigen::Vector3d n = Eigen::Vector3d::Zero();
-      n[axis] = side ? 1.0 : -1.0;
-      const double at = side ? hi[axis] : lo[axis];
-      PlanarPrimitive face;
-      face.plane = paco::Plane(n, -n[axis] * at);
-      for (int i = 0; i < 300; ++i) {
-        Eigen::Vector3d x;
-        for (int k = 0; k < 3; ++k) x[k] = std::uniform_real_distribution<double>(lo[k], hi[k])(random);
-        x[axis] = at;
-        pcl::PointNormal p;
-        p.x = float(x.x()), p.y = float(x.y()), p.z = float(x.z());
-        p.normal_x = float(n.x()), p.normal_y = float(n.y()), p.normal_z = float(n.z());
-        face.points.push_back(p);
-      }
-      primitives.push_back(face);
-    }
+    for (int side = 0; side < 2; ++side)
+      primitives.push_back(coveredAxisPlane(axis, side ? hi[axis] : lo[axis], side ? 1.0 : -1.0, lo, hi, 300, random));
   PlanarPrimitive patch;
   patch.plane = paco::Plane(normal, -normal.normalized().dot(corner));
   const Eigen::Vector3f n = patch.plane.normal.cast<float>();

@@ -158,11 +158,14 @@ class PolygonalAssembler {
   /// Pre-processing: two primitives are merged when their planes differ by less than this angle
   /// (radians, unoriented; default 2 degrees) ...
   void setMergeAngle(double radians);
+  double getMergeAngle() const { return merge_angle_; }
   /// ... and each one's points lie on average closer than this to the other's plane, as a
   /// fraction of the bounding-box diagonal of all points (default 0.005). 0 disables merging.
   void setMergeDistance(double fraction_of_diagonal);
+  double getMergeDistance() const { return merge_distance_; }
   /// Primitives with fewer inlier points than this are dropped (default 10, minimum 3).
   void setMinSupport(std::size_t points);
+  std::size_t getMinSupport() const { return min_support_; }
 
   /// Cell-complex: weight of the surface-area (smoothness) term relative to the point votes,
   /// > 0, default 0.2. Larger closes holes with fewer, larger faces; smaller follows the points.
@@ -173,6 +176,7 @@ class PolygonalAssembler {
   /// to missing data; 0: only where the points are. When the result is not a closed manifold,
   /// the backend retries with 2x and then 4x this margin.
   void setExtentMargin(double fraction_of_diagonal);
+  double getExtentMargin() const { return extent_margin_; }
 
   /// Runs pre-processing and the backend. On success `mesh` is closed, manifold and oriented with
   /// outward normals, in the input frame and units. On failure `mesh` is cleared, except for
