@@ -176,6 +176,25 @@ int main(int argc, char** argv) {
     }
   }
 
+  // Floors and walls of a building: planes that cross the whole box make the largest complexes.
+  std::printf("\n## Lattices of covered planes (the unit cube and k planes per axis, 150 points each)\n\n");
+  std::printf("| k | seed | planes | cells | cell-complex wall (s) | status | closed | relabelling flips |\n");
+  std::printf("|---:|---:|---:|---:|---:|---|---|---:|\n");
+  for (int inner : {4, 6, 8, 10})
+    for (unsigned seed : {1u, 2u, 3u}) {
+      paco::PolygonalAssembler assembler;
+      assembler.setInputPrimitives(paco::test::latticeOfCoveredPlanes(inner, seed));
+      assembler.setBackend("cell-complex");
+      assembler.setTimeLimit(time_limit);
+      paco::SurfaceMesh mesh;
+      const auto& result = assembler.reconstruct(mesh);
+      std::printf("| %d | %u | %zu | %zu | %.3f | %s | %s | %d |\n", inner, seed, result.num_input_planes, result.num_cells,
+                  result.seconds, paco::toString(result.status).c_str(),
+                  !mesh.empty() && paco::analyseTopology(mesh).isClosedManifold() ? "yes" : "no",
+                  result.num_crossings_resolved);
+      std::fflush(stdout);
+    }
+
   if (mfcad.empty() || !std::filesystem::is_directory(mfcad)) return 0;
   std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(mfcad))

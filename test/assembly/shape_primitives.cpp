@@ -76,4 +76,35 @@ std::size_t countPlanarRegions(const paco::SurfaceMesh& mesh) {
   return regions;
 }
 
+PlanarPrimitive coveredAxisPlane(int axis, double at, double sign, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                                 int count, std::mt19937& random) {
+  const Eigen::Vector3d n = sign * Eigen::Vector3d::Unit(axis);
+  PlanarPrimitive primitive;
+  primitive.plane = paco::Plane(n, -n[axis] * at);
+  for (int i = 0; i < count; ++i) {
+    Eigen::Vector3d x;
+    for (int k = 0; k < 3; ++k) x[k] = std::uniform_real_distribution<double>(lo[k], hi[k])(random);
+    x[axis] = at;
+    pcl::PointNormal p;
+    p.getVector3fMap() = x.cast<float>();
+    p.getNormalVector3fMap() = n.cast<float>();
+    primitive.points.push_back(p);
+  }
+  return primitive;
+}
+
+std::vector<PlanarPrimitive> latticeOfCoveredPlanes(int inner, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> offset(0.05, 0.95);
+  std::vector<PlanarPrimitive> primitives;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> offsets = {0.0, 1.0};
+    for (int k = 0; k < inner; ++k) offsets.push_back(offset(random));
+    for (double at : offsets)
+      primitives.push_back(
+          coveredAxisPlane(axis, at, 1.0, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 150, random));
+  }
+  return primitives;
+}
+
 }  // namespace paco::test

@@ -5,6 +5,7 @@
 #include <paco/common/surface_mesh.h>
 
 #include <cstddef>
+#include <random>
 #include <vector>
 
 namespace paco::test {
@@ -21,5 +22,13 @@ std::vector<PlanarPrimitive> primitivesOf(const SurfaceMesh& mesh, std::size_t s
                                           double angle_cosine = 1 - 1e-6, double offset_fraction = 1e-6);
 /// Planar faces after merging edge-adjacent coplanar polygons.
 std::size_t countPlanarRegions(const SurfaceMesh& mesh);
+/// The plane x[axis] = at with outward normal sign * e_axis, and `count` points spread at random
+/// over the box [lo, hi]'s cross-section there.
+PlanarPrimitive coveredAxisPlane(int axis, double at, double sign, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                                 int count, std::mt19937& random);
+/// The six planes of the unit cube and `inner` planes per axis at random offsets, each with 150
+/// points over the whole cube's cross-section: the floors and walls of a building, a cell complex
+/// of (inner + 1)^3 cells and more.
+std::vector<PlanarPrimitive> latticeOfCoveredPlanes(int inner, unsigned seed);
 
 }  // namespace paco::test

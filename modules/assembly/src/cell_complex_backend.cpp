@@ -25,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -394,14 +395,6 @@ SurfaceMesh extractBoundary(const std::vector<Cell>& cells, const std::vector<Ad
   return mesh;
 }
 
-// Defects left once PolygonalAssembler has finished the mesh (it separates sheets that touch, for
-// one, so the raw mesh's pinched vertices do not count).
-std::size_t defectsAfterFinishing(SurfaceMesh mesh) {
-  if (mesh.faces.empty()) return std::numeric_limits<std::size_t>::max();
-  const MeshTopology t = finishAssembledMesh(mesh);
-  return t.boundary_edges + t.non_manifold_edges + t.inconsistent_edges + t.non_manifold_vertices;
-}
-
 // Edges of the mesh used by one face or by more than two: where the surface is open or pinched.
 std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> defectiveEdges(const SurfaceMesh& mesh) {
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
@@ -416,47 +409,77 @@ std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> defectiveEdges(const Su
   return edges;
 }
 
+// Defects left once PolygonalAssembler has finished the mesh (it separates sheets that touch, for
+// one, so the raw mesh's pinched vertices do not count), and optionally the finished mesh's
+// defective edges.
+std::size_t defectsAfterFinishing(SurfaceMesh mesh,
+                                  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>* edges = nullptr) {
+  if (mesh.faces.empty()) return std::numeric_limits<std::size_t>::max();
+  const MeshTopology t = finishAssembledMesh(mesh);
+  if (edges) *edges = defectiveEdges(mesh);
+  return t.boundary_edges + t.non_manifold_edges + t.inconsistent_edges + t.non_manifold_vertices;
+}
+
+// The cells with a face edge along one of `edges` for more than a point.
+std::vector<int> cellsAlong(const std::vector<Cell>& cells,
+                            const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& edges) {
+  std::vector<int> along;
+  for (const auto& [from, to] : edges) {
+    if ((to - from).norm() < 1e-12) continue;
+    for (int c = 0; c < static_cast<int>(cells.size()); ++c) {
+      const auto [t0, t1] = edgeIntervalAlong(cells[c], from, to, 1e-7);
+      if (t1 - t0 > 1e-9) along.push_back(c);
+    }
+  }
+  std::sort(along.begin(), along.end());
+  along.erase(std::unique(along.begin(), along.end()), along.end());
+  return along;
+}
+
 // What the X-pattern search cannot see (more than four cells around an edge, cells reaching an
 // edge over part of its length): flips, one at a time, a cell along a defective edge of the
 // extracted surface, the one raising the min-cut energy least among those that reduce the
 // defects, until the surface is a closed manifold, no flip helps or `out_of_time()`. Returns the
-// flips.
+// flips. The cells along the finished surface's defective edges are tried first: the raw
+// surface has many more defective edges (sheets that touch, which finishing separates), and each
+// trial extracts and finishes the whole surface, so trying those first made large complexes
+// (thousands of cells) take tens of seconds.
 int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjacency>& adjacencies, int num_primitives,
                         const std::function<double(int)>& flip_cost, const std::function<bool()>& out_of_time,
                         std::vector<bool>& inside) {
   int flips = 0;
   SurfaceMesh mesh = extractBoundary(cells, adjacencies, inside, num_primitives);
-  std::size_t defects = defectsAfterFinishing(mesh);
-  for (int round = 0; defects > 0 && round < 32 && !out_of_time(); ++round) {
-    std::vector<int> candidates;
-    for (const auto& [from, to] : defectiveEdges(mesh)) {
-      if ((to - from).norm() < 1e-12) continue;
-      for (int c = 0; c < static_cast<int>(cells.size()); ++c) {
-        const auto [t0, t1] = edgeIntervalAlong(cells[c], from, to, 1e-7);
-        if (t1 - t0 > 1e-9) candidates.push_back(c);
-      }
-    }
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> finished_edges;
+  std::size_t defects = defectsAfterFinishing(mesh, &finished_edges);
+  // Flips the cheapest of `candidates` (by flip cost) that lowers the defects, if any.
+  auto flipOneOf = [&](const std::vector<int>& candidates) {
     std::vector<std::pair<double, int>> by_cost;
     for (int c : candidates) by_cost.push_back({flip_cost(c), c});
     std::sort(by_cost.begin(), by_cost.end());
-    bool improved = false;
     for (const auto& [cost, c] : by_cost) {
-      if (out_of_time()) break;
+      if (out_of_time()) return false;
       inside[c] = !inside[c];
       SurfaceMesh attempt = extractBoundary(cells, adjacencies, inside, num_primitives);
-      const std::size_t attempt_defects = defectsAfterFinishing(attempt);
+      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> attempt_edges;
+      const std::size_t attempt_defects = defectsAfterFinishing(attempt, &attempt_edges);
       if (attempt_defects < defects) {
         mesh = std::move(attempt);
+        finished_edges = std::move(attempt_edges);
         defects = attempt_defects;
         ++flips;
-        improved = true;
-        break;
+        return true;
       }
       inside[c] = !inside[c];
     }
-    if (!improved) break;
+    return false;
+  };
+  for (int round = 0; defects > 0 && round < 32 && !out_of_time(); ++round) {
+    const std::vector<int> first = cellsAlong(cells, finished_edges);
+    if (flipOneOf(first)) continue;
+    std::vector<int> rest;
+    const std::vector<int> raw = cellsAlong(cells, defectiveEdges(mesh));
+    std::set_difference(raw.begin(), raw.end(), first.begin(), first.end(), std::back_inserter(rest));
+    if (!flipOneOf(rest)) break;
   }
   return flips;
 }
