@@ -315,9 +315,12 @@ int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::
     return false;
   };
   int flips = 0;
-  const int max_flips = 4 * num_cells + 16;
+  // Each cell flips at most once: flipping a cell back and forth between two crossings it takes
+  // part in otherwise went on until a flip cap (4 per cell), and the labelling drifted from the
+  // min cut. At most num_cells flips, hence the loop ends.
+  std::vector<bool> flipped(cells.size(), false);
   bool changed = true;
-  while (changed && flips < max_flips) {
+  while (changed) {
     changed = false;
     for (int a = 0; a < num_cells && !changed; ++a) {
       for (const auto& [c, wc] : neighbours[a]) {
@@ -333,11 +336,13 @@ int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::
             const auto along_c = edgeIntervalAlong(cells[c], from, to, 1e-9);
             const auto along_d = edgeIntervalAlong(cells[d], from, to, 1e-9);
             if (std::min(along_c.second, along_d.second) - std::max(along_c.first, along_d.first) <= 1e-7) continue;
-            int best = a;
-            double best_cost = flip_cost(a);
-            for (int x : {b, c, d})
-              if (const double cost = flip_cost(x); cost < best_cost) best = x, best_cost = cost;
+            int best = -1;
+            double best_cost = std::numeric_limits<double>::infinity();
+            for (int x : {a, b, c, d})
+              if (const double cost = flip_cost(x); !flipped[x] && cost < best_cost) best = x, best_cost = cost;
+            if (best < 0) continue;  // all four flipped once already: left to repairByRelabelling
             inside[best] = !inside[best];
+            flipped[best] = true;
             ++flips;
             changed = true;
             break;
