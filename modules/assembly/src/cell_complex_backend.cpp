@@ -445,10 +445,11 @@ std::vector<int> cellsAlong(const std::vector<Cell>& cells,
 // edge over part of its length): flips, one at a time, a cell along a defective edge of the
 // extracted surface, the one raising the min-cut energy least among those that reduce the
 // defects, until the surface is a closed manifold, no flip helps or `out_of_time()`. Returns the
-// flips. The cells along the finished surface's defective edges are tried first: the raw
-// surface has many more defective edges (sheets that touch, which finishing separates), and each
-// trial extracts and finishes the whole surface, so trying those first made large complexes
-// (thousands of cells) take tens of seconds.
+// flips. The cells along the finished surface's defective edges are tried first, those along the
+// raw surface's only when none helps: the raw surface has many more defective edges (sheets that
+// touch, which finishing separates), and each trial extracts and finishes the whole surface, so
+// trying all of the raw surface's cells made large complexes (thousands of cells) take tens of
+// seconds.
 int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjacency>& adjacencies, int num_primitives,
                         const std::function<double(int)>& flip_cost, const std::function<bool()>& out_of_time,
                         std::vector<bool>& inside) {
