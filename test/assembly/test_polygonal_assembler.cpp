@@ -221,7 +221,7 @@ TEST(CellComplex, AxisAlignedSpuriousPlanesStillGiveAClosedManifold) {
 // Floors and walls of a building: about 1,700 cells, some of whose labels leave non-manifold
 // edges that only relabelling repairs. Trying the cells along every defective edge of the raw
 // surface first took 50-60 s on these seeds and ran out of a 20 s budget (not watertight); the
-// cells along the finished surface's defects first take well under a second.
+// cells along the finished surface's defects first take one or two seconds.
 TEST(CellComplex, ALatticeOfCoveredPlanesGivesAClosedManifoldWithinItsBudget) {
   for (unsigned seed : {3u, 8u}) {
     SCOPED_TRACE("seed " + std::to_string(seed));

@@ -306,6 +306,8 @@ bool sharedEdge(const Cell& a, const Cell& b, double tolerance, double min_lengt
 // reverse), gives a non-manifold edge: four boundary faces on one line, an "X". Each such
 // configuration is removed by flipping the one of its four cells that raises the min-cut energy
 // least; repeated until none is left (bounded: each flip can create others). Returns the flips.
+// A cell can flip back and forth between two crossings until the bound; letting each cell flip
+// only once was tried and cut a large piece off an MFCAD part's solid (doc/assembly.md).
 int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::vector<std::pair<int, double>>>& neighbours,
                          const std::function<double(int)>& flip_cost, std::vector<bool>& inside) {
   const int num_cells = static_cast<int>(cells.size());
@@ -315,12 +317,9 @@ int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::
     return false;
   };
   int flips = 0;
-  // Each cell flips at most once: flipping a cell back and forth between two crossings it takes
-  // part in otherwise went on until a flip cap (4 per cell), and the labelling drifted from the
-  // min cut. At most num_cells flips, hence the loop ends.
-  std::vector<bool> flipped(cells.size(), false);
+  const int max_flips = 4 * num_cells + 16;
   bool changed = true;
-  while (changed) {
+  while (changed && flips < max_flips) {
     changed = false;
     for (int a = 0; a < num_cells && !changed; ++a) {
       for (const auto& [c, wc] : neighbours[a]) {
@@ -336,13 +335,11 @@ int resolveEdgeCrossings(const std::vector<Cell>& cells, const std::vector<std::
             const auto along_c = edgeIntervalAlong(cells[c], from, to, 1e-9);
             const auto along_d = edgeIntervalAlong(cells[d], from, to, 1e-9);
             if (std::min(along_c.second, along_d.second) - std::max(along_c.first, along_d.first) <= 1e-7) continue;
-            int best = -1;
-            double best_cost = std::numeric_limits<double>::infinity();
-            for (int x : {a, b, c, d})
-              if (const double cost = flip_cost(x); !flipped[x] && cost < best_cost) best = x, best_cost = cost;
-            if (best < 0) continue;  // all four flipped once already: left to repairByRelabelling
+            int best = a;
+            double best_cost = flip_cost(a);
+            for (int x : {b, c, d})
+              if (const double cost = flip_cost(x); cost < best_cost) best = x, best_cost = cost;
             inside[best] = !inside[best];
-            flipped[best] = true;
             ++flips;
             changed = true;
             break;
