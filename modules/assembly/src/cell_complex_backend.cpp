@@ -412,13 +412,11 @@ std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> defectiveEdges(const Su
 }
 
 // Defects left once PolygonalAssembler has finished the mesh (it separates sheets that touch, for
-// one, so the raw mesh's pinched vertices do not count), and optionally the finished mesh's
-// defective edges.
-std::size_t defectsAfterFinishing(SurfaceMesh mesh,
-                                  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>* edges = nullptr) {
+// one, so the raw mesh's pinched vertices do not count), and optionally the finished mesh.
+std::size_t defectsAfterFinishing(SurfaceMesh mesh, SurfaceMesh* finished = nullptr) {
   if (mesh.faces.empty()) return std::numeric_limits<std::size_t>::max();
   const MeshTopology t = finishAssembledMesh(mesh);
-  if (edges) *edges = defectiveEdges(mesh);
+  if (finished) *finished = std::move(mesh);
   return t.boundary_edges + t.non_manifold_edges + t.inconsistent_edges + t.non_manifold_vertices;
 }
 
@@ -452,8 +450,8 @@ int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjace
                         std::vector<bool>& inside) {
   int flips = 0;
   SurfaceMesh mesh = extractBoundary(cells, adjacencies, inside, num_primitives);
-  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> finished_edges;
-  std::size_t defects = defectsAfterFinishing(mesh, &finished_edges);
+  SurfaceMesh finished;
+  std::size_t defects = defectsAfterFinishing(mesh, &finished);
   // Flips the cheapest of `candidates` (by flip cost) that lowers the defects, if any.
   auto flipOneOf = [&](const std::vector<int>& candidates) {
     std::vector<std::pair<double, int>> by_cost;
@@ -463,11 +461,11 @@ int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjace
       if (out_of_time()) return false;
       inside[c] = !inside[c];
       SurfaceMesh attempt = extractBoundary(cells, adjacencies, inside, num_primitives);
-      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> attempt_edges;
-      const std::size_t attempt_defects = defectsAfterFinishing(attempt, &attempt_edges);
+      SurfaceMesh attempt_finished;
+      const std::size_t attempt_defects = defectsAfterFinishing(attempt, &attempt_finished);
       if (attempt_defects < defects) {
         mesh = std::move(attempt);
-        finished_edges = std::move(attempt_edges);
+        finished = std::move(attempt_finished);
         defects = attempt_defects;
         ++flips;
         return true;
@@ -477,7 +475,7 @@ int repairByRelabelling(const std::vector<Cell>& cells, const std::vector<Adjace
     return false;
   };
   for (int round = 0; defects > 0 && round < 32 && !out_of_time(); ++round) {
-    const std::vector<int> first = cellsAlong(cells, finished_edges);
+    const std::vector<int> first = cellsAlong(cells, defectiveEdges(finished));
     if (flipOneOf(first)) continue;
     std::vector<int> rest;
     const std::vector<int> raw = cellsAlong(cells, defectiveEdges(mesh));
