@@ -3,6 +3,7 @@
 // reported alike.
 #include "app_support.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/normalization.h>
 #include <paco/common/point_types.h>
@@ -33,7 +34,7 @@ inline FusionFlags libraryFusionFlags() {
 /// turned for the network (models with input orientation "seen-planes"), so that a user sees
 /// what the model was given.
 inline void reportCompletion(std::size_t primitives, double threshold, int turns, const Normalization& frame) {
-  const double degrees = Eigen::AngleAxisd(frame.rotation).angle() * 180.0 / 3.14159265358979323846;
+  const double degrees = paco::radiansToDegrees(Eigen::AngleAxisd(frame.rotation).angle());
   std::printf("complete: %zu primitives with confidence > %.2f", primitives, threshold);
   if (turns > 1) std::printf(" (voted over %d turns of the scan)", turns);
   if (degrees > 0.05) std::printf(" (the scan turned by %.1f deg onto its seen faces for the network)", degrees);

@@ -3,6 +3,7 @@
 #include "app_support.h"
 
 #include <paco/assembly/polygonal_assembler.h>
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
 #include <paco/io/cloud_io.h>
@@ -22,7 +23,6 @@ namespace po = boost::program_options;
 namespace {
 
 const std::string kTool = "paco_assemble";
-constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180.0;
 
 void printHelp(const po::options_description& options) {
   std::cout << "Usage: " << kTool << " PRIMITIVES -o MESH [options]\n\n"
@@ -83,7 +83,7 @@ int run(int argc, char** argv) {
          coverage = defaults.getCoverageWeight(), complexity = defaults.getComplexityWeight(),
          smoothness = defaults.getSmoothness();
   std::size_t min_support = defaults.getMinSupport(), max_candidate_faces = defaults.getMaxCandidateFaces();
-  double merge_distance = defaults.getMergeDistance(), merge_angle = defaults.getMergeAngle() / kRadiansPerDegree;
+  double merge_distance = defaults.getMergeDistance(), merge_angle = paco::radiansToDegrees(defaults.getMergeAngle());
   using paco::app::shortNumber;
   po::options_description options("Options");
   options.add_options()
@@ -135,7 +135,7 @@ int run(int argc, char** argv) {
     assembler.setComplexityWeight(complexity);
     assembler.setSmoothness(smoothness);
     assembler.setMinSupport(min_support);
-    assembler.setMergeAngle(merge_angle * kRadiansPerDegree);
+    assembler.setMergeAngle(paco::degreesToRadians(merge_angle));
     assembler.setMergeDistance(merge_distance);
     assembler.setMaxCandidateFaces(max_candidate_faces);
   } catch (const paco::InvalidInputError& e) {

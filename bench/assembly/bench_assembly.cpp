@@ -9,6 +9,7 @@
 
 #include "shape_primitives.h"
 #include "shapes.h"
+#include <paco/common/angles.h>
 
 #include <boost/program_options.hpp>
 
@@ -108,7 +109,7 @@ paco::SurfaceMesh makeStar(int sides, unsigned seed) {
   std::uniform_real_distribution<double> jitter(-0.15, 0.15);
   std::vector<Eigen::Vector2d> profile;
   for (int i = 0; i < sides; ++i) {
-    const double angle = 2 * M_PI * (i + 0.3 * jitter(rng)) / sides;
+    const double angle = 2 * paco::kPi * (i + 0.3 * jitter(rng)) / sides;
     const double radius = (i % 2 ? 0.65 : 1.0) + jitter(rng);
     profile.emplace_back(radius * std::cos(angle), radius * std::sin(angle));
   }
@@ -217,7 +218,7 @@ int main(int argc, char** argv) {
     ++runs;
     const paco::SurfaceMesh mesh = paco::io::loadMesh(file.string());
     // Coplanar triangles grouped as in mfcad.tsv: normals within ~0.06 deg, offsets 5e-4 of the diagonal.
-    const auto primitives = paco::test::primitivesOf(mesh, 10000, std::cos(0.06 * M_PI / 180), 5e-4);
+    const auto primitives = paco::test::primitivesOf(mesh, 10000, std::cos(paco::degreesToRadians(0.06)), 5e-4);
     const double volume = std::abs(paco::signedVolume(mesh));
     if (!save_primitives.empty())
       paco::io::saveVertexGroups(save_primitives + "/" + file.stem().string() + ".bvg",

@@ -8,6 +8,7 @@
 #include "segmentation_fixtures.h"
 #include "shapes.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/segmentation/segmentation.h>
 #ifdef PACO_BENCH_WITH_IO
@@ -101,7 +102,7 @@ std::vector<Shape> generatedShapes() {
   shapes.push_back({"wedge", makePrism({{0, 0}, {1, 0}, {1, 0.3}, {0, 0.8}}, 0.6)});
   // Oblique poses: no face on an axis plane.
   std::mt19937_64 rng(42);
-  std::uniform_real_distribution<double> angle(0.0, 2.0 * M_PI);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * paco::kPi);
   for (auto& s : shapes) {
     const Eigen::Matrix3d r = (Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitZ()) *
                                Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()) *

@@ -7,6 +7,7 @@
 #ifdef PACO_TEST_WITH_COMPLETION
 #include <torch/torch.h>  // before PCL-using headers (see doc/training.md)
 
+#include <paco/common/angles.h>
 #include <paco/completion/checkpoint.h>
 
 #include "tiny_model_config.h"
@@ -234,7 +235,7 @@ TEST(PacoReconstruct, AKnownFootprintInOtherAxesClosesTheTurnedBox) {
   paco::PacoNetwork network(paco::test::tinyModelConfig());
   paco::saveCheckpoint(dir.file("tiny.pt"), network);
   const Eigen::Matrix3d turn =
-      Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      Eigen::AngleAxisd(paco::degreesToRadians(30.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   writeHalfBoxScan(dir.file("turned_half_box.pcd"), turn);
   std::string footprint;
   for (int i = 0; i < 8; ++i) {

@@ -1,6 +1,7 @@
 // PolygonalAssembler on exact primitives of generated shapes: both backends must return closed,
 // manifold, outward meshes with the right planar faces, volume and vertex positions; bad inputs
 // must fail with the right status.
+#include <paco/common/angles.h>
 #include <paco/assembly/polygonal_assembler.h>
 #include <paco/common/error.h>
 
@@ -198,7 +199,7 @@ std::vector<PlanarPrimitive> boxWithAxisAlignedSpuriousPatches(unsigned seed, in
   std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> axis_of(0, 2), sign_of(0, 1), step(1, 7);
-  std::uniform_real_distribution<double> tilt_angle(-5.0 * M_PI / 180, 5.0 * M_PI / 180);
+  std::uniform_real_distribution<double> tilt_angle(-paco::degreesToRadians(5.0), paco::degreesToRadians(5.0));
   for (int k = 0; k < patches; ++k) {
     const int axis = axis_of(rng);
     const Eigen::Matrix3d tilt = (Eigen::AngleAxisd(tilt_angle(rng), Eigen::Vector3d::UnitX()) *
@@ -264,7 +265,7 @@ TEST(Preprocessing, MergesNearDuplicatePlanesAndDropsWeakPrimitives) {
   auto primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 1, 1}));
   // A near-duplicate of primitive 0 (tilted by 0.5 degrees, shifted by 0.001) and a 5-point scrap.
   PlanarPrimitive duplicate = primitives[0];
-  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.5 * M_PI / 180, duplicate.plane.normal.unitOrthogonal()).toRotationMatrix();
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(paco::degreesToRadians(0.5), duplicate.plane.normal.unitOrthogonal()).toRotationMatrix();
   duplicate.plane = paco::Plane(tilt * duplicate.plane.normal, duplicate.plane.offset + 0.001);
   for (auto& p : duplicate.points) p.getVector3fMap() += 0.001f * duplicate.plane.normal.cast<float>();
   PlanarPrimitive scrap;
@@ -279,7 +280,7 @@ TEST(Preprocessing, MergesNearDuplicatePlanesAndDropsWeakPrimitives) {
   primitives.push_back(scrap);
 
   std::vector<paco::PrimitiveFate> fates;
-  const auto kept = paco::mergeAndFilterPrimitives(primitives, 2 * M_PI / 180, 0.005 * std::sqrt(3.0), 10, &fates);
+  const auto kept = paco::mergeAndFilterPrimitives(primitives, paco::degreesToRadians(2), 0.005 * std::sqrt(3.0), 10, &fates);
   ASSERT_EQ(kept.size(), 6u);
   ASSERT_EQ(fates.size(), 8u);
   EXPECT_EQ(fates[6].kind, paco::PrimitiveFate::MergedInto);

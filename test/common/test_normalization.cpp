@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/normalization.h>
 #include <paco/common/orientation.h>
@@ -53,7 +54,7 @@ TEST(Normalization, DegenerateCloudIsRejected) {
 
 namespace {
 Eigen::Matrix3d turn(double degrees, const Eigen::Vector3d& axis) {
-  return Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180.0, axis.normalized()).toRotationMatrix();
+  return Eigen::AngleAxisd(paco::degreesToRadians(degrees), axis.normalized()).toRotationMatrix();
 }
 }  // namespace
 
@@ -127,11 +128,11 @@ TEST(Orientation, TurnsTheDominantSeenFacesOntoTheAxes) {
   // The largest face lands exactly on an axis, the second within its noise (0.6 degrees).
   const auto on_axis = [](const Eigen::Vector3d& v) { return v.normalized().cwiseAbs().maxCoeff(); };
   EXPECT_NEAR(on_axis(R * normals[0]), 1.0, 1e-12);
-  EXPECT_GT(on_axis(R * normals[1]), std::cos(0.6 * 3.14159265358979323846 / 180.0));
-  EXPECT_GT(on_axis(R * normals[2]), std::cos(0.6 * 3.14159265358979323846 / 180.0));
+  EXPECT_GT(on_axis(R * normals[1]), std::cos(paco::degreesToRadians(0.6)));
+  EXPECT_GT(on_axis(R * normals[2]), std::cos(paco::degreesToRadians(0.6)));
   // Of the 24 such turns, the one closest to the identity: it undoes R0 (a 23-degree turn), up
   // to the second face's noise.
-  EXPECT_LT(Eigen::AngleAxisd(R * R0).angle(), 0.6 * 3.14159265358979323846 / 180.0);
+  EXPECT_LT(Eigen::AngleAxisd(R * R0).angle(), paco::degreesToRadians(0.6));
 }
 
 TEST(Orientation, LeavesAnAxisAlignedScanAsItIs) {

@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/plane.h>
 
@@ -57,5 +58,5 @@ TEST(Plane, UnorientedAngleIgnoresFlip) {
   const Plane a(Eigen::Vector3d(0, 0, 1), 0);
   EXPECT_NEAR(a.unorientedAngleTo(a.flipped()), 0.0, 1e-12);
   const Plane b(Eigen::Vector3d(1, 0, 1), 0);
-  EXPECT_NEAR(a.unorientedAngleTo(b), M_PI / 4, 1e-12);
+  EXPECT_NEAR(a.unorientedAngleTo(b), paco::kPi / 4, 1e-12);
 }

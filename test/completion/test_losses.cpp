@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/completion/batch.h>
 #include <paco/completion/losses.h>
@@ -204,7 +205,7 @@ TEST(Losses, DisablingTermsRemovesThem) {
 TEST(Losses, RankingTargetsAndLoss) {
   Scene s = makeScene();
   // Candidates: GT plane 1 exactly, GT plane 0 flipped (same plane, other orientation), off by 0.1 in r, 5° off.
-  const double a = 5.0 * 3.14159265358979 / 180.0;
+  const double a = paco::degreesToRadians(5.0);
   s.output.candidate_normals = torch::tensor({0.f, 0.f, 1.f, 0.f, 0.f, 1.f, 0.f, 0.f, 1.f,
                                               static_cast<float>(std::sin(a)), 0.f, static_cast<float>(std::cos(a))})
                                    .view({1, 4, 3});
@@ -323,7 +324,7 @@ TEST(Batch, CollateOwnFrameMovesInputAndTruthTogether) {
 TEST(Batch, CollateSeenPlanesTurnsTheSampleOntoTheAxes) {
   // The cube sample turned by 30 degrees about (1, 2, 0): its faces are on no axis.
   const Eigen::Matrix3d R0 =
-      Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
+      Eigen::AngleAxisd(paco::degreesToRadians(30.0), Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
   paco::data::Sample s = cubeSample();
   for (auto* cloud : {&s.input, &s.gt_points})
     for (auto& p : *cloud) {

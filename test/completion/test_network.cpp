@@ -1,5 +1,6 @@
 #include "test_network_support.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/completion/network.h>
 
@@ -80,8 +81,8 @@ TEST(PointDistributor, PointsAreOnThePlaneIncludingDegenerateCases) {
       // Half of the rays nearly parallel to the plane (u.n -> 0), half random.
       auto theta_n = torch::acos(normals.select(1, 2)).unsqueeze(1);
       auto phi_n = torch::atan2(normals.select(1, 1), normals.select(1, 0)).unsqueeze(1);
-      auto theta = torch::cat({(theta_n + M_PI / 2 + 1e-7).expand({planes, P / 2}),
-                               torch::rand({planes, P / 2}) * M_PI}, 1);
+      auto theta = torch::cat({(theta_n + paco::kPi / 2 + 1e-7).expand({planes, P / 2}),
+                               torch::rand({planes, P / 2}) * paco::kPi}, 1);
       auto phi = torch::cat({phi_n.expand({planes, P / 2}), torch::rand({planes, P / 2}) * 6.28}, 1);
       raw = torch::stack({theta, phi}, -1);
     }

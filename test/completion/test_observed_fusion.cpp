@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/completion/observed_fusion.h>
 
@@ -56,7 +57,7 @@ TEST(ObservedFusion, APredictedPlaneTakesTheObservedPlaneAndPoints) {
   // Observed: the top z = 1 of a unit-ish part, its normal pointing down (segmenters do not
   // orient). Predicted: the same face 3° tilted and 0.01 too high, oriented outward (+z).
   const Plane observed_plane = Plane::fromPointAndNormal({0, 0, 1}, {0, 0, -1});
-  const double tilt = 3.0 * 3.14159265358979 / 180.0;
+  const double tilt = paco::degreesToRadians(3.0);
   const Plane predicted_plane =
       Plane::fromPointAndNormal({0, 0, 1.01}, {std::sin(tilt), 0.0, std::cos(tilt)});
   const std::vector<PlanarPrimitive> observed = {patch(observed_plane, {0, 0, 1}, 1.0, 10, 1.0f)};
@@ -160,7 +161,7 @@ TEST(ObservedFusion, DuplicatePredictionsOfASeenFaceAreAbsorbed) {
   // Two predictions of the seen face z = 0 (one 2° and 0.01 off, one 4° and 0.015 off) and one of
   // the unseen face z = 1: the seen face ends up once, with the points of both duplicates.
   const Plane seen = Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1});
-  const double a2 = 2.0 * 3.14159265358979 / 180.0, a4 = 4.0 * 3.14159265358979 / 180.0;
+  const double a2 = paco::degreesToRadians(2.0), a4 = paco::degreesToRadians(4.0);
   const std::vector<PlanarPrimitive> observed = {patch(seen, {0, 0, 0}, 1.0, 10, 1.0f)};
   const std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0, 0, -0.01}, {std::sin(a2), 0, -std::cos(a2)}), {0, 0, 0}, 1.0, 4, 0.9f),
@@ -181,7 +182,7 @@ TEST(ObservedFusion, TolerancesDecideAndBadOptionsAreRejected) {
   const Plane observed_plane = Plane::fromPointAndNormal({0, 0, 0}, {0, 0, 1});
   const std::vector<PlanarPrimitive> observed = {patch(observed_plane, {0, 0, 0}, 1.0, 10, 1.0f)};
   // 15° away: beyond the default 10°, so the observation is added instead of snapped.
-  const double tilt = 15.0 * 3.14159265358979 / 180.0;
+  const double tilt = paco::degreesToRadians(15.0);
   const std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0, 0, 0}, {std::sin(tilt), 0, std::cos(tilt)}), {0, 0, 0}, 1.0, 4, 0.9f)};
   ObservedFusionReport report;
@@ -206,7 +207,7 @@ TEST(ObservedFusion, UnseenPlanesNearASeenDirectionAreTurnedParallelToIt) {
   // Seen: the bottom z = 0 and the side x = 0 of a unit part. Predicted, unseen: the top, 4° off
   // the seen bottom's direction, the far side y = 1, 6° off the third dominant axis (no seen
   // face has it), and a 45° chamfer that matches no seen direction.
-  const double deg = 3.14159265358979 / 180.0;
+  const double deg = paco::kPi / 180.0;
   const std::vector<PlanarPrimitive> observed = seenBottomAndSide();
   std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0.5, 0.5, 1.0}, {std::sin(4 * deg), 0, std::cos(4 * deg)}), {0.5, 0.5, 1}, 1.0, 6, 0.9f),
@@ -408,7 +409,7 @@ TEST(ObservedFusion, AnUnseenGuessOfABoxFaceTakesTheFaceAndOutranksTheOtherGuess
   // The box of seenBottomAndSide() is x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375].
   // Predicted: a small patch of its face x = 0.95, 5 degrees off and 0.01 outside, with the
   // confidence of a guess. The box fill puts the rest of that face's points on it.
-  const double tilt = 5.0 * 3.14159265358979 / 180.0;
+  const double tilt = paco::degreesToRadians(5.0);
   const Plane guess = Plane::fromPointAndNormal({0.96, 0.2, 0.2}, {std::cos(tilt), std::sin(tilt), 0.0});
   const std::vector<PlanarPrimitive> completed = {patch(guess, {0.96, 0.2, 0.2}, 0.3, 5, 0.75f)};
   ObservedFusionOptions options;

@@ -2,6 +2,7 @@
 #include "test_network_support.h"
 #include "test_support.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/normalization.h>
 #include <paco/completion/checkpoint.h>
@@ -171,7 +172,7 @@ TEST_F(PublicApi, SeenPlanesModelCompletesATurnedScanAsTheUnturnedOneTurned) {
 
   // The box turned by 30 degrees about an oblique axis through a corner, in user units.
   const Eigen::Matrix3d R0 =
-      Eigen::AngleAxisd(30.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+      Eigen::AngleAxisd(paco::degreesToRadians(30.0), Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
   const Eigen::Vector3d pivot(10, -5, 3);
   SegmentedBox turned;
   for (auto& p : turned.cloud->points) {
@@ -435,7 +436,7 @@ TEST(PacoCompleteTool, WritesPrimitivesAndFailsCleanly) {
   turning.input_orientation = "seen-planes";
   PacoNetwork turning_net(turning);
   saveCheckpoint(dir.file("turning.pt"), turning_net);
-  const Eigen::Matrix3d R0 = Eigen::AngleAxisd(20.0 * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d R0 = Eigen::AngleAxisd(paco::degreesToRadians(20.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   std::string turned_xyz;
   for (const auto& p : box.cloud->points) {
     const Eigen::Vector3d x = R0 * p.getVector3fMap().cast<double>();

@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/completion/turn_ensemble.h>
 
@@ -9,7 +10,7 @@
 namespace paco {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using paco::kPi;
 
 // A k x k grid of points on the plane, centred at the plane's point nearest to `centre`, with
 // the plane's normal; the grid spans `size`.
@@ -31,7 +32,7 @@ PlanarPrimitive grid(const Plane& plane, const Eigen::Vector3d& centre, double s
 }
 
 Plane tilted(double degrees, double height) {  // z = height, normal +z turned about y
-  const double a = degrees * kPi / 180.0;
+  const double a = paco::degreesToRadians(degrees);
   return Plane::fromPointAndNormal({0.5, 0.5, height}, {std::sin(a), 0.0, std::cos(a)});
 }
 

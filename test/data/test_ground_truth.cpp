@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/data/ground_truth.h>
 
@@ -82,7 +83,7 @@ TEST(GroundTruth, InsideOutMeshIsFlippedToOutwardNormals) {
 
 TEST(GroundTruth, TessellatedCylinderIsRejected) {
   std::vector<Eigen::Vector2d> circle;
-  for (int k = 0; k < 48; ++k) circle.emplace_back(std::cos(2 * M_PI * k / 48), std::sin(2 * M_PI * k / 48));
+  for (int k = 0; k < 48; ++k) circle.emplace_back(std::cos(2 * paco::kPi * k / 48), std::sin(2 * paco::kPi * k / 48));
   try {
     extractGroundTruth(paco::test::makePrism(circle, 2.0));
     FAIL() << "a tessellated cylinder was accepted";
@@ -91,7 +92,7 @@ TEST(GroundTruth, TessellatedCylinderIsRejected) {
   }
   // A hexagonal prism is plane-only (60 degree turns).
   std::vector<Eigen::Vector2d> hexagon;
-  for (int k = 0; k < 6; ++k) hexagon.emplace_back(std::cos(M_PI * k / 3), std::sin(M_PI * k / 3));
+  for (int k = 0; k < 6; ++k) hexagon.emplace_back(std::cos(paco::kPi * k / 3), std::sin(paco::kPi * k / 3));
   EXPECT_EQ(extractGroundTruth(paco::test::makePrism(hexagon, 1.0)).faces.size(), 8u);
 }
 

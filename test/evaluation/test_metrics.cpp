@@ -1,4 +1,5 @@
 // CD, HD, NC, the failure box and NC_prim against hand-computed values.
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/evaluation/metrics.h>
 
@@ -311,7 +312,7 @@ TEST(PrimitiveAgreement, UnmatchedPlanesAreCounted) {
                                  paco::Plane({0, 0, 1}, -1)};
   // Two of four GT planes predicted exactly, one tilted by 60 degrees (|cos| = 0.5): (1+1+0.5)/4.
   std::vector<paco::Plane> predicted = {paco::Plane({1, 0, 0}, 0.2), paco::Plane({0, 1, 0}, 0),
-                                        paco::Plane({0, std::sin(M_PI / 3), std::cos(M_PI / 3)}, 0)};
+                                        paco::Plane({0, std::sin(paco::kPi / 3), std::cos(paco::kPi / 3)}, 0)};
   ev::PrimitiveAgreement a = ev::comparePrimitives(predicted, gt);
   EXPECT_NEAR(a.nc_prim, 2.5 / 4.0, 1e-12);
   EXPECT_EQ(a.unmatched_reference, 1u);

@@ -1,6 +1,7 @@
 // The `paco` evaluation method: the full pipeline (segment, encode, complete, assemble) with a
 // model file, in both frames. An untrained tiny model is enough to check the wiring and the
 // failure accounting; the quality of a trained model is measured by paco_eval (doc/results.md).
+#include <paco/common/angles.h>
 #include <paco/assembly/polygonal_assembler.h>
 #include <paco/common/error.h>
 #include <paco/completion/checkpoint.h>
@@ -112,7 +113,7 @@ TEST(PacoMethod, FusionKeepsThePlaneOfEverySeenFace) {
   bool top = false;
   std::string horizontal;
   for (const paco::Plane& plane : out.planes) {
-    top = top || (std::abs(plane.normal.z()) > std::cos(10.0 * 3.14159265358979 / 180.0) &&
+    top = top || (std::abs(plane.normal.z()) > std::cos(paco::degreesToRadians(10.0)) &&
                   std::abs(plane.signedDistance({0, 0, 0.2})) < 0.02 * 0.88);
     if (std::abs(plane.normal.z()) > 0.9)
       horizontal += " (n.z " + std::to_string(plane.normal.z()) + ", at " +

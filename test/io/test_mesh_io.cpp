@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/io/mesh_io.h>
 
@@ -284,7 +285,7 @@ TEST(MeshIo, PlyKeepsFacesWithMoreThan255Vertices) {
   paco::test::TempDir dir;
   std::vector<Eigen::Vector2d> circle;
   for (int i = 0; i < 300; ++i)
-    circle.emplace_back(std::cos(2 * M_PI * i / 300.0), std::sin(2 * M_PI * i / 300.0));
+    circle.emplace_back(std::cos(2 * paco::kPi * i / 300.0), std::sin(2 * paco::kPi * i / 300.0));
   const paco::SurfaceMesh prism = paco::test::makePrism(circle, 0.5);
   paco::io::saveMesh(dir.file("p.ply"), prism);
   const paco::SurfaceMesh back = paco::io::loadMesh(dir.file("p.ply"));

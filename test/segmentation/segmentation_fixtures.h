@@ -3,6 +3,7 @@
 // test/support shapes (one plane per face), partial views, and plane-recovery scoring.
 #include "shapes.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/primitive.h>
 #include <paco/common/surface_mesh.h>
 
@@ -109,7 +110,7 @@ inline PlaneRecovery scoreRecovery(const LabelledSample& gt, const PlanarSegment
           gt.plane_normals[static_cast<std::size_t>(g)]);
       if (oriented < 0.0) ++r.facing_inwards;
       const double c = std::min(1.0, std::abs(oriented));
-      r.worst_angle_deg = std::max(r.worst_angle_deg, std::acos(c) * 180.0 / M_PI);
+      r.worst_angle_deg = std::max(r.worst_angle_deg, paco::radiansToDegrees(std::acos(c)));
     }
   }
   return r;

@@ -2,6 +2,7 @@
 #include "segmentation_fixtures.h"
 #include "shapes.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/segmentation/gocopp_segmenter.h>
 
@@ -125,7 +126,7 @@ pcl::PointCloud<pcl::PointNormal>::Ptr ridge(double slope, std::vector<int>& sid
 
 TEST(GoCoPPOperators, AnOverMergedRegionSplits) {
   std::vector<int> side;
-  auto cloud = ridge(std::tan(15.0 * M_PI / 180.0), side);  // a 150° ridge
+  auto cloud = ridge(std::tan(paco::degreesToRadians(15.0)), side);  // a 150° ridge
   const auto lists = knn(cloud);
   GoCoPPOptimizer optimizer(*cloud, lists, parameters());
   optimizer.setLabels(std::vector<int>(cloud->size(), 0));

@@ -2,6 +2,7 @@
 #include "segmentation_fixtures.h"
 #include "shapes.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/segmentation/segmentation.h>
 
@@ -64,7 +65,7 @@ TEST_P(EveryBackend, CleanBoxGivesSixPlanesWithinOneDegree) {
         best = static_cast<int>(f);
       }
     }
-    EXPECT_GT(best_cos, std::cos(1.0 * M_PI / 180.0)) << "plane normal " << plane.normal.transpose();
+    EXPECT_GT(best_cos, std::cos(paco::degreesToRadians(1.0))) << "plane normal " << plane.normal.transpose();
     matched.insert(best);
   }
   EXPECT_EQ(matched.size(), 6u) << "each face gets its own plane";
@@ -135,7 +136,7 @@ TEST_P(EveryBackend, NoisyBoxWithoutNormalsTakesNormalsFromMoreNeighbours) {
     face_offset /= static_cast<double>(count);
     bool matched = false;
     for (const auto& plane : result.planes)
-      matched |= plane.normal.dot(outward) > std::cos(5.0 * M_PI / 180.0) &&
+      matched |= plane.normal.dot(outward) > std::cos(paco::degreesToRadians(5.0)) &&
                  std::abs(plane.offset - face_offset) < 0.03 * diagonal;
     EXPECT_TRUE(matched) << "face " << f << " normal " << outward.transpose() << " offset " << face_offset;
   }
@@ -543,7 +544,7 @@ TEST(NoiseAdaptation, ANoisyBoxGetsOnePlanePerFace) {
   EXPECT_GT(result.coverage(), 0.9);
   for (std::size_t f = 0; f < box.plane_normals.size(); ++f) {
     bool matched = false;
-    for (const auto& plane : result.planes) matched |= plane.normal.dot(box.plane_normals[f]) > std::cos(2.0 * M_PI / 180.0);
+    for (const auto& plane : result.planes) matched |= plane.normal.dot(box.plane_normals[f]) > std::cos(paco::degreesToRadians(2.0));
     EXPECT_TRUE(matched) << "face " << f << " normal " << box.plane_normals[f].transpose();
   }
 }

@@ -4,6 +4,7 @@
 #include "backends.h"
 #include "mip_traits.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/progress.h>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -64,7 +65,7 @@ double windingNumber(const SurfaceMesh& solid, const Eigen::Vector3d& x) {
       const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
       total += 2.0 * std::atan2(numerator, denominator);
     }
-  return total / (4.0 * 3.14159265358979323846);
+  return total / (4.0 * kPi);
 }
 
 // 1 for each of CGAL's candidate faces (in its order, which is the order of its face variables)

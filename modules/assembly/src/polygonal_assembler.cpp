@@ -3,6 +3,7 @@
 #include "backends.h"
 #include "mesh_cleanup.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/normalization.h>
 #include <paco/common/progress.h>
@@ -22,7 +23,6 @@ namespace paco {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // The share of the time left that PolyFit's warm start (the cell complex) may use.
 constexpr double kWarmStartBudgetShare = 0.5;
 
@@ -233,7 +233,7 @@ std::vector<PlanarPrimitive> mergeAndFilterPrimitives(const std::vector<PlanarPr
         const double d_pq = meanAbsDistance(p.points, q.plane), d_qp = meanAbsDistance(q.points, p.plane);
         if (d_pq > merge_distance || d_qp > merge_distance) continue;
         std::ostringstream why;
-        why << "angle " << angle * 180.0 / kPi << " deg, mean distance " << std::max(d_pq, d_qp);
+        why << "angle " << radiansToDegrees(angle) << " deg, mean distance " << std::max(d_pq, d_qp);
         local[i].kind = PrimitiveFate::MergedInto;
         local[i].target = kept_source[k];
         local[i].reason = why.str();
@@ -258,7 +258,7 @@ std::vector<PlanarPrimitive> mergeAndFilterPrimitives(const std::vector<PlanarPr
   return result;
 }
 
-PolygonalAssembler::PolygonalAssembler() : merge_angle_(2.0 * kPi / 180.0) {}
+PolygonalAssembler::PolygonalAssembler() : merge_angle_(degreesToRadians(2.0)) {}
 PolygonalAssembler::~PolygonalAssembler() = default;
 
 void PolygonalAssembler::setInputPrimitives(std::vector<PlanarPrimitive> primitives) { input_ = std::move(primitives); }

@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/orientation.h>
 
@@ -37,7 +38,7 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
   std::vector<Eigen::Vector3d> unit;
   for (std::size_t i : order) unit.push_back(normals[i].normalized());
-  const double radians = tolerance_degrees * 3.14159265358979323846 / 180.0;
+  const double radians = degreesToRadians(tolerance_degrees);
   const double max_cosine = std::sin(radians), min_cosine = std::cos(radians);
   const auto support = [&](const Eigen::Matrix3d& axes) {
     double total = 0.0;

@@ -1,5 +1,6 @@
 #include <paco/completion/losses.h>
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/completion/matching.h>
 
@@ -22,7 +23,6 @@ torch::Tensor pairwiseSquaredDistances(const torch::Tensor& a, const torch::Tens
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 void requireShape(const torch::Tensor& t, const std::vector<int64_t>& shape, const char* name) {
   bool ok = t.defined() && t.dim() == static_cast<int64_t>(shape.size());
@@ -184,7 +184,7 @@ torch::Tensor rankingTargets(const torch::Tensor& candidate_normals, const torch
   const int64_t B = candidate_normals.size(0);
   const int64_t Q = candidate_normals.size(1);
   auto targets = torch::zeros({B, Q}, candidate_normals.options().dtype(torch::kFloat));
-  const double min_cosine = std::cos(config.ranking_angle_deg * kPi / 180.0);
+  const double min_cosine = std::cos(degreesToRadians(config.ranking_angle_deg));
   for (int64_t b = 0; b < B; ++b) {
     const int planes = truth.planeCount(static_cast<int>(b));
     if (planes == 0) continue;
@@ -248,7 +248,7 @@ LossResult computeLosses(const NetworkOutput& output, const GroundTruthBatch& tr
   if (config.classification) {
     auto target = torch::zeros({B * M}, output.logits.options());
     if (any_match && config.quality_classification) {
-      const double min_cosine = std::cos(config.quality_angle_deg * kPi / 180.0);
+      const double min_cosine = std::cos(degreesToRadians(config.quality_angle_deg));
       const auto good = ((n.detach() * gt_n).sum(-1) > min_cosine)
                             .logical_and((r.detach() - gt_r).abs() < config.quality_offset);
       target.index_put_({pred_index}, good.to(target.dtype()));
@@ -364,7 +364,7 @@ PlaneMetrics planeMetrics(const NetworkOutput& output, const GroundTruthBatch& t
                           const LossConfig& config, double confidence_threshold) {
   torch::NoGradGuard no_grad;
   PlaneMetrics total;
-  const double min_cosine = std::cos(config.ranking_angle_deg * kPi / 180.0);
+  const double min_cosine = std::cos(degreesToRadians(config.ranking_angle_deg));
   for (int b = 0; b < truth.batchSize(); ++b) {
     PlaneMetrics m;
     const int planes = truth.planeCount(b);

@@ -2,6 +2,7 @@
 
 #include "nearest_neighbours.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/orientation.h>
 
@@ -19,7 +20,6 @@
 namespace paco {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector3d position(const pcl::PointNormal& p) { return {p.x, p.y, p.z}; }
 
@@ -306,7 +306,7 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
   const double diagonal = seen.box.diagonal().norm();
   if (!(diagonal > 0.0)) return;
   const double step = options.fill_spacing * diagonal, radius = options.fill_empty_radius * diagonal;
-  const double max_angle = options.max_angle_degrees * kPi / 180.0;
+  const double max_angle = degreesToRadians(options.max_angle_degrees);
   const double max_offset = options.max_distance * diagonal;
   const Eigen::Vector3d lo = seen.box.min(), hi = seen.box.max();
   // Grids of all six faces first, all tested against the fused points as they were.
@@ -485,7 +485,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     if (!options.known_extent_points[i].allFinite())
       throw InvalidInputError("fuseWithObserved: known extent point " + std::to_string(i) + " is not finite");
   ObservedFusionReport counts;
-  const double max_angle = options.max_angle_degrees * kPi / 180.0;
+  const double max_angle = degreesToRadians(options.max_angle_degrees);
   const double max_distance = options.max_distance * diagonalOf(observed);
   const double join_distance = options.join_distance * diagonalOf(observed);
 
@@ -575,7 +575,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points);
   if (options.align_unseen_degrees > 0.0) {
     const auto directions = seenDirections(seen_normals);
-    const double max_align = options.align_unseen_degrees * kPi / 180.0;
+    const double max_align = degreesToRadians(options.align_unseen_degrees);
     for (std::size_t c = 0; c < completed.size(); ++c)
       if (!snapped[c] && !absorbed[c] && alignWithNearest(completed[c], directions, max_align)) ++counts.aligned;
   }

@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/completion/turn_ensemble.h>
@@ -14,7 +15,6 @@
 namespace paco {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // One predicted primitive of one run.
 struct Vote {
@@ -120,7 +120,7 @@ std::vector<PlanarPrimitive> mergeTurnPredictions(const std::vector<std::vector<
   std::stable_sort(votes.begin(), votes.end(),
                    [](const Vote& a, const Vote& b) { return a.primitive->confidence > b.primitive->confidence; });
 
-  const double min_cos = std::cos(options.max_angle_degrees * kPi / 180.0);
+  const double min_cos = std::cos(degreesToRadians(options.max_angle_degrees));
   const double max_distance = options.max_distance * diagonal;
   std::vector<Group> groups;
   for (const Vote& v : votes) {

@@ -1,5 +1,6 @@
 #include <paco/data/ground_truth.h>
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 
 #include <algorithm>
@@ -137,7 +138,7 @@ GroundTruth extractGroundTruth(const SurfaceMesh& input, const GroundTruthOption
     if (sliver[x] != sliver[y]) return sliver[x] < sliver[y];
     return geometry[x].area > geometry[y].area;
   });
-  const double cos_tolerance = std::cos(options.normal_tolerance_deg * M_PI / 180.0);
+  const double cos_tolerance = std::cos(degreesToRadians(options.normal_tolerance_deg));
   const double offset_tolerance = options.offset_tolerance * gt.diagonal;
   std::vector<Plane> anchors;
   gt.triangle_face.assign(n, -1);
@@ -206,7 +207,7 @@ GroundTruth extractGroundTruth(const SurfaceMesh& input, const GroundTruthOption
   std::unordered_map<std::uint64_t, int> edge_face;  // undirected edge -> plane of the first triangle seen
   edge_face.reserve(3 * n);
   std::vector<std::vector<int>> shallow_neighbours(gt.faces.size());
-  const double cos_shallow = std::cos(options.shallow_crease_deg * M_PI / 180.0);
+  const double cos_shallow = std::cos(degreesToRadians(options.shallow_crease_deg));
   for (std::size_t t = 0; t < n; ++t) {
     const int g = gt.triangle_face[t];
     if (g < 0) continue;

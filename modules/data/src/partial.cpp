@@ -2,6 +2,7 @@
 
 #include "random.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 
 #include <CGAL/AABB_traits.h>
@@ -45,7 +46,7 @@ Eigen::Vector3d viewpointDirection(int view, int views) {
                             std::to_string(views - 1));
   if (views <= 8) return kCubeCorners[view].normalized();
   // Fibonacci sphere: near-uniform directions for any count.
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  const double golden = kPi * (3.0 - std::sqrt(5.0));
   const double z = 1.0 - 2.0 * (view + 0.5) / views;
   const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
   return Eigen::Vector3d(r * std::cos(golden * view), r * std::sin(golden * view), z);

@@ -2,6 +2,7 @@
 
 #include "random.h"
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
@@ -65,7 +66,7 @@ Nef convexPrism(const std::vector<Eigen::Vector2d>& polygon, double w0, double w
 std::vector<Eigen::Vector2d> regularPolygon(const Eigen::Vector2d& c, double r, int n, double phase) {
   std::vector<Eigen::Vector2d> polygon;
   for (int k = 0; k < n; ++k) {
-    const double a = phase + 2.0 * M_PI * k / n;
+    const double a = phase + 2.0 * kPi * k / n;
     polygon.emplace_back(snap(c.x() + r * std::cos(a)), snap(c.y() + r * std::sin(a)));
   }
   return polygon;
@@ -137,7 +138,7 @@ Nef featuredBox(detail::Rng& rng) {
         const double r = gridValue(rng, 0.25, 0.5);
         const double cx = gridValue(rng, -half.x() + r + margin, half.x() - r - margin);
         const double cy = gridValue(rng, -half.y() + r + margin, half.y() - r - margin);
-        part -= convexPrism(regularPolygon({cx, cy}, r, n, rng.uniform(0.0, M_PI)), -half.z() - 1, half.z() + 1, 2);
+        part -= convexPrism(regularPolygon({cx, cy}, r, n, rng.uniform(0.0, kPi)), -half.z() - 1, half.z() + 1, 2);
         break;
       }
     }
@@ -148,7 +149,7 @@ Nef featuredBox(detail::Rng& rng) {
 Nef prismPart(detail::Rng& rng) {
   const int n = rng.integer(3, 8);
   const double r = gridValue(rng, 1.0, 1.75), h = gridValue(rng, 0.5, 2.0);
-  Nef part = convexPrism(regularPolygon({0, 0}, r, n, rng.uniform(0.0, M_PI)), -h / 2, h / 2, 2);
+  Nef part = convexPrism(regularPolygon({0, 0}, r, n, rng.uniform(0.0, kPi)), -h / 2, h / 2, 2);
   if (rng.uniform() < 0.5)  // a through-hole of polygonal section
     part -= convexPrism(regularPolygon({0, 0}, gridValue(rng, 0.25, 0.5 * r), rng.integer(3, 8), 0.0), -h, h, 2);
   return part;

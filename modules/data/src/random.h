@@ -1,6 +1,7 @@
 #pragma once
 // Internal: a seeded random source whose output is fixed by the C++ standard (mt19937_64 and our
 // own conversions), so that datasets are byte-identical across compilers and standard libraries.
+#include <paco/common/angles.h>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -31,9 +32,9 @@ class Rng {
     while (u <= 0.0) u = uniform();
     const double v = uniform();
     const double r = std::sqrt(-2.0 * std::log(u));
-    spare_ = r * std::sin(2.0 * M_PI * v);
+    spare_ = r * std::sin(2.0 * kPi * v);
     has_spare_ = true;
-    return r * std::cos(2.0 * M_PI * v);
+    return r * std::cos(2.0 * kPi * v);
   }
   /// Uniform integer in [0, n), n > 0.
   std::uint64_t index(std::uint64_t n) { return static_cast<std::uint64_t>(uniform() * static_cast<double>(n)) % n; }

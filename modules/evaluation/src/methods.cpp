@@ -1,5 +1,6 @@
 #include <paco/evaluation/methods.h>
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/point_types.h>
 #include <paco/common/normalization.h>
@@ -38,7 +39,6 @@ static_assert(kDefaultNoiseAdaptation == kScanNoiseMultiple, "the evaluation seg
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -417,7 +417,7 @@ std::vector<PlanarPrimitive> addBoundingBoxPrior(const pcl::PointCloud<pcl::Poin
     const Eigen::Vector3d first = visible[by_size[0]].plane.normal.normalized();
     for (std::size_t k = 1; k < by_size.size(); ++k) {
       const Eigen::Vector3d n = visible[by_size[k]].plane.normal.normalized();
-      if (std::abs(n.dot(first)) > std::sin(10.0 * kPi / 180.0)) continue;
+      if (std::abs(n.dot(first)) > std::sin(degreesToRadians(10.0))) continue;
       const Eigen::Vector3d second = (n - n.dot(first) * first).normalized();
       axes.col(0) = first;
       axes.col(1) = second;
@@ -470,7 +470,7 @@ std::vector<PlanarPrimitive> addBoundingBoxPrior(const pcl::PointCloud<pcl::Poin
       // Join a visible primitive on (nearly) the same plane, else add the box face as a new one.
       PlanarPrimitive* host = nullptr;
       for (auto& p : visible) {
-        if (p.plane.normal.dot(normal) < std::cos(10.0 * kPi / 180.0)) continue;
+        if (p.plane.normal.dot(normal) < std::cos(degreesToRadians(10.0))) continue;
         if (std::abs(p.plane.signedDistance(on_plane)) > 0.02 * diagonal) continue;
         host = &p;
         break;

@@ -1,6 +1,7 @@
 // Orienting segments whose normals were estimated: consistently across shared edges, then each
 // connected group as a whole (see orientEstimatedSegments in prepared_cloud.h).
 #include <paco/segmentation/prepared_cloud.h>
+#include <paco/common/angles.h>
 
 #include <algorithm>
 #include <cmath>
@@ -162,7 +163,7 @@ void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<st
     edge.first_to_second_plane.classify(points, planes[key.second], band);
   }
 
-  const double near_parallel = std::cos(kNearParallelDegrees * M_PI / 180.0);
+  const double near_parallel = std::cos(degreesToRadians(kNearParallelDegrees));
   std::vector<Relation> relations;
   for (const auto& [key, edge] : edges) {
     const auto& [a, b] = key;
