@@ -391,7 +391,7 @@ TEST(PolyFit, ATimeOutReturnsTheWarmStartsSurface) {
   paco::PolygonalAssembler assembler;
   assembler.setInputPrimitives(primitives);
   assembler.setMaxCandidateFaces(0);  // all of them, so that the program stays too hard
-  assembler.setTimeLimit(4.0);        // the start gets at most half, and needs a fraction of that
+  assembler.setTimeLimit(4.0);        // the start gets at most three quarters, and needs a fraction of that
   SurfaceMesh mesh;
   const paco::AssemblyResult& polyfit = assembler.reconstruct(mesh);
   ASSERT_TRUE(polyfit.ok()) << paco::toString(polyfit.status) << ": " << polyfit.message;

@@ -239,11 +239,20 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
         if (std::isfinite(settings.start[i])) columns.push_back(static_cast<int>(i)), values.push_back(settings.start[i]);
       Cbc_setMIPStartI(model, static_cast<int>(columns.size()), columns.data(), values.data());
     }
+    const auto began = std::chrono::steady_clock::now();
     Cbc_solve(model);
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
     const double* best = Cbc_bestSolution(model);
     run.optimal = Cbc_isProvenOptimal(model) != 0;
     run.hit_time_limit = Cbc_isSecondsLimitReached(model) != 0 || Cbc_secondaryStatus(model) == 4;
     run.infeasible = Cbc_isProvenInfeasible(model) != 0;
+    // When the time limit cuts CBC's pre-processing short, its cut generators can report a feasible
+    // program infeasible (seen on PolyFit programs, which the empty surface always satisfies): a
+    // verdict reached with the time used up is a time-out, not a proof.
+    if (run.infeasible && !best && elapsed >= settings.seconds) {
+      run.infeasible = false;
+      run.hit_time_limit = true;
+    }
     run.status = Cbc_status(model);
     run.secondary_status = Cbc_secondaryStatus(model);
     if (best) {

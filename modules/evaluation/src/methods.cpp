@@ -153,7 +153,7 @@ std::map<std::string, Entry>& registry() {
       out.has_mesh = true;
       out.mesh = std::move(mesh);
       if (result.returned_warm_start)
-        out.message = "time limit hit without a PolyFit solution; the warm start's surface (the cell complex) was used";
+        out.message = result.message;
       else if (result.hit_time_limit)
         out.message = "time limit hit; the best solution found was used";
       break;
