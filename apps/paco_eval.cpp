@@ -74,8 +74,8 @@ void printHelp(const po::options_description& visible) {
             << "Dataset mode writes OUT_DIR/eval.csv (one row per case; an existing one is resumed: its\n"
             << "cases are skipped) and OUT_DIR/results.md (tables per level and overall). A case fails when\n"
             << "it has no mesh, an empty, open, non-manifold or non-oriented one, runs out of time or\n"
-            << "throws; it is then scored as the failure box. Methods: direct, oracle, poisson-qem,\n"
-            << "box-prior, sanity (every case scored as failed), paco (when the learned stages are built).\n"
+            << "throws; it is then scored as the failure box. Methods: direct, oracle, oracle-seen-hull,\n"
+            << "poisson-qem, box-prior, sanity (every case scored as failed), paco (when the learned stages are built).\n"
             << "Available in this build: " << boost::algorithm::join(ev::availableMethods(), ", ") << "\n\n"
             << visible << std::endl;
 }
@@ -261,7 +261,7 @@ int run(int argc, char** argv) {
       ("same-seed", po::bool_switch(&o.same_seed), "single mode: sample both meshes with the same seed (a mesh against itself scores exactly 0)")
       ("dataset", po::value(&o.dataset), "dataset mode: folder written by paco_dataset")
       ("split", po::value(&o.split)->default_value(o.split), "train, val or test")
-      ("methods", po::value(&o.methods)->default_value(o.methods), "comma-separated: direct, oracle, poisson-qem, box-prior, sanity, paco")
+      ("methods", po::value(&o.methods)->default_value(o.methods), "comma-separated: direct, oracle, oracle-seen-hull, poisson-qem, box-prior, sanity, paco")
       ("assemblers", po::value(&o.assemblers)->default_value(o.assemblers), "comma-separated: polyfit, cell-complex")
       ("levels", po::value(&o.levels)->default_value(o.levels), "missing levels: 0 (25 %), 1 (50 %), 2 (75 %)")
       ("views", po::value(&o.views)->default_value(o.views), "view indices")

@@ -143,3 +143,58 @@ TEST(BoxPrior, FillsTheMissingFaceOfABox) {
   for (std::size_t i = 0; i < 5; ++i) after += completed[i].points.size();
   EXPECT_EQ(after, before);  // the observed faces had no empty parts
 }
+
+// An L bracket (a unit square with its 0.6 x 0.6 corner cut out, 0.6 high): six planes on the
+// convex hull and the two walls of the notch, which are not.
+TEST(OracleSeenHull, KeepsTheSeenFacesAndTheHullAndClosesOverAnUnseenNotch) {
+  if (!has(ev::availableMethods(), "oracle-seen-hull")) GTEST_SKIP() << "built without paco::assembly";
+  const double a = 1.0, b = 0.4, h = 0.6;
+  const paco::SurfaceMesh bracket = paco::test::makeLBracket(a, b, h);
+  const std::vector<paco::Plane> planes = {
+      paco::Plane({-1, 0, 0}, 0), paco::Plane({0, -1, 0}, 0), paco::Plane({1, 0, 0}, -a), paco::Plane({0, 1, 0}, -a),
+      paco::Plane({0, 0, -1}, 0), paco::Plane({0, 0, 1}, -h),
+      paco::Plane({1, 0, 0}, -b), paco::Plane({0, 1, 0}, -b)};  // the notch's walls
+  ev::MethodInput in;
+  in.gt_points = sampleCloud(bracket, 8000, 7);
+  in.gt_planes = planes;
+  for (const auto& p : in.gt_points) {
+    int label = -1;
+    for (std::size_t k = 0; k < planes.size(); ++k)
+      if (planes[k].normal.dot(p.getNormalVector3fMap().cast<double>()) > 0.99 &&
+          std::abs(planes[k].signedDistance(p.getVector3fMap().cast<double>())) < 1e-5)
+        label = static_cast<int>(k);
+    ASSERT_GE(label, 0) << p;
+    in.gt_labels.push_back(label);
+  }
+  // The scan: the GT points of the given planes, labelled with them.
+  auto scanOf = [&](const std::vector<int>& seen_planes) {
+    in.input.clear();
+    in.input_labels.clear();
+    for (std::size_t i = 0; i < in.gt_points.size(); ++i)
+      if (std::count(seen_planes.begin(), seen_planes.end(), in.gt_labels[i])) {
+        in.input.push_back(in.gt_points[i]);
+        in.input_labels.push_back(in.gt_labels[i]);
+      }
+  };
+  ev::MethodOptions options;
+  options.assembler = "cell-complex";
+
+  scanOf({0, 5});  // the x = 0 side and the top: the notch is not seen
+  ev::MethodOutput out = ev::runMethod("oracle-seen-hull", in, options);
+  ASSERT_TRUE(out.has_mesh) << out.message;
+  ASSERT_EQ(out.planes.size(), 6u);
+  for (const paco::Plane& p : out.planes)
+    EXPECT_TRUE(std::abs(p.offset + b) > 1e-6 || std::abs(p.normal.z()) > 0.99) << "a notch wall was kept";
+  EXPECT_NEAR(paco::signedVolume(out.mesh), a * a * h, 0.01 * a * a * h);  // the bounding box
+
+  scanOf({0, 5, 6, 7});  // the notch seen too: every plane, the bracket itself
+  out = ev::runMethod("oracle-seen-hull", in, options);
+  ASSERT_TRUE(out.has_mesh) << out.message;
+  EXPECT_EQ(out.planes.size(), 8u);
+  EXPECT_NEAR(paco::signedVolume(out.mesh), h * (a * a - (a - b) * (a - b)), 0.01 * a * a * h);
+
+  in.input_labels.pop_back();  // a label short: the method says so, and the case fails
+  out = ev::runMethod("oracle-seen-hull", in, options);
+  EXPECT_EQ(out.reason, ev::FailureReason::Threw);
+  EXPECT_NE(out.message.find("label"), std::string::npos) << out.message;
+}

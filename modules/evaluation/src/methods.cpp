@@ -22,6 +22,7 @@
 #include <pcl/kdtree/kdtree_flann.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <chrono>
@@ -39,6 +40,8 @@ static_assert(kDefaultNoiseAdaptation == kScanNoiseMultiple, "the evaluation seg
 
 namespace {
 
+// oracle-seen-hull: a GT face counts as seen from this many of its points in the scan on.
+constexpr std::size_t kMinSeenOraclePoints = 3;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -47,6 +50,9 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 struct Entry {
   MethodFunction function;
   bool uses_assembler = true;
+  /// Reads the dataset's label of every input point, so the input reaches it as it is: not
+  /// thinned, no repeats left out (runMethod).
+  bool reads_input_labels = false;
 };
 
 std::mutex& registryMutex() {
@@ -109,7 +115,8 @@ std::map<std::string, Entry>& registry() {
   return makePrimitives(in.input, visibleSegmentation(in, options, out));
 }
 
-[[maybe_unused]] std::vector<PlanarPrimitive> oraclePrimitives(const MethodInput& in) {
+// One primitive per GT plane (by index), with the GT points labelled with it; some may be empty.
+[[maybe_unused]] std::vector<PlanarPrimitive> oraclePrimitivesByPlane(const MethodInput& in) {
   if (in.gt_labels.size() != in.gt_points.size())
     throw InvalidInputError("the sample's GT labels do not match its GT points");
   std::vector<PlanarPrimitive> primitives(in.gt_planes.size());
@@ -124,9 +131,49 @@ std::map<std::string, Entry>& registry() {
     pt.normal_z = static_cast<float>(n.z());
     primitives[static_cast<std::size_t>(l)].points.push_back(pt);
   }
+  return primitives;
+}
+
+[[maybe_unused]] std::vector<PlanarPrimitive> oraclePrimitives(const MethodInput& in) {
+  std::vector<PlanarPrimitive> primitives = oraclePrimitivesByPlane(in);
   primitives.erase(std::remove_if(primitives.begin(), primitives.end(), [](const PlanarPrimitive& p) { return p.points.empty(); }),
                    primitives.end());
   return primitives;
+}
+
+// A GT plane is on the part's convex hull when all GT points lie on one side of it.
+[[maybe_unused]] bool onConvexHull(const Plane& plane, const pcl::PointCloud<pcl::PointNormal>& gt_points, double tolerance) {
+  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+  for (const auto& p : gt_points) {
+    const double d = plane.signedDistance(p.getVector3fMap().cast<double>());
+    lowest = std::min(lowest, d);
+    highest = std::max(highest, d);
+  }
+  return lowest >= -tolerance || highest <= tolerance;
+}
+
+// The GT planes of the faces the scan sees and of the GT's convex hull, each with all its GT
+// points: a perfect completion of every seen face and of the part's hull that guesses no hidden
+// concavity (pocket, step, slot). What a method that infers nothing it cannot see can score.
+[[maybe_unused]] std::vector<PlanarPrimitive> seenAndHullOraclePrimitives(const MethodInput& in) {
+  if (in.input_labels.size() != in.input.size())
+    throw InvalidInputError("oracle-seen-hull needs the GT face of every input point; the sample has " +
+                            std::to_string(in.input_labels.size()) + " labels for " + std::to_string(in.input.size()) +
+                            " points");
+  std::vector<std::size_t> seen(in.gt_planes.size(), 0);
+  for (int l : in.input_labels)
+    if (l >= 0 && static_cast<std::size_t>(l) < seen.size()) ++seen[static_cast<std::size_t>(l)];
+  Eigen::AlignedBox3d box;
+  for (const auto& p : in.gt_points) box.extend(p.getVector3fMap().cast<double>());
+  // GT points lie on their faces up to float rounding; 1e-4 of the diagonal is far above that
+  // and far below any MFCAD feature.
+  const double tolerance = 1e-4 * (box.isEmpty() ? 1.0 : box.diagonal().norm());
+  std::vector<PlanarPrimitive> all = oraclePrimitivesByPlane(in);
+  std::vector<PlanarPrimitive> kept;
+  for (std::size_t p = 0; p < all.size(); ++p)
+    if (!all[p].points.empty() && (seen[p] >= kMinSeenOraclePoints || onConvexHull(in.gt_planes[p], in.gt_points, tolerance)))
+      kept.push_back(std::move(all[p]));
+  return kept;
 }
 
 // Assembles primitives and fills the output (mesh, status, times).
@@ -188,6 +235,12 @@ std::map<std::string, Entry>& registry() {
 [[maybe_unused]] MethodOutput runOracle(const MethodInput& in, const MethodOptions& options) {
   MethodOutput out;
   assemble(oraclePrimitives(in), options, out);
+  return out;
+}
+
+[[maybe_unused]] MethodOutput runSeenAndHullOracle(const MethodInput& in, const MethodOptions& options) {
+  MethodOutput out;
+  assemble(seenAndHullOraclePrimitives(in), options, out);
   return out;
 }
 
@@ -303,6 +356,7 @@ void registerBuiltins(std::map<std::string, Entry>& r) {
 #ifdef PACO_EVALUATION_WITH_ASSEMBLY
   r.emplace("direct", Entry{runDirect, true});
   r.emplace("oracle", Entry{runOracle, true});
+  r.emplace("oracle-seen-hull", Entry{runSeenAndHullOracle, true, true});
   r.emplace("box-prior", Entry{runBoxPrior, true});
 #endif
 #if defined(PACO_EVALUATION_WITH_COMPLETION) && defined(PACO_EVALUATION_WITH_ASSEMBLY)
@@ -330,7 +384,7 @@ std::vector<std::string> availableMethods() {
   return names;
 }
 
-std::vector<std::string> knownMethods() { return {"direct", "oracle", "poisson-qem", "box-prior", "paco", "sanity"}; }
+std::vector<std::string> knownMethods() { return {"direct", "oracle", "oracle-seen-hull", "poisson-qem", "box-prior", "paco", "sanity"}; }
 
 bool methodUsesAssembler(const std::string& name) {
   std::lock_guard<std::mutex> lock(registryMutex());
@@ -342,6 +396,7 @@ bool methodUsesAssembler(const std::string& name) {
 
 MethodOutput runMethod(const std::string& name, const MethodInput& input, const MethodOptions& options) {
   MethodFunction function;
+  bool reads_input_labels = false;
   {
     std::lock_guard<std::mutex> lock(registryMutex());
     registerBuiltins(registry());
@@ -349,12 +404,14 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
     if (it == registry().end()) {
       std::string why = "method '" + name + "' is not available in this build";
       if (name == "paco") why += ": it needs paco::completion and paco::assembly (the learned stages and the assembler)";
-      else if (name == "direct" || name == "oracle" || name == "box-prior") why += ": it needs paco::assembly (and paco::segmentation)";
+      else if (name == "direct" || name == "oracle" || name == "oracle-seen-hull" || name == "box-prior")
+        why += ": it needs paco::assembly (and paco::segmentation)";
       else if (name == "poisson-qem") why += ": it needs CGAL (PACO_WITH_CGAL=ON)";
-      else why += "; known methods: direct, oracle, poisson-qem, box-prior, paco, sanity";
+      else why += "; known methods: direct, oracle, oracle-seen-hull, poisson-qem, box-prior, paco, sanity";
       throw InvalidInputError(why);
     }
     function = it->second.function;
+    reads_input_labels = it->second.reads_input_labels;
   }
   const auto start = std::chrono::steady_clock::now();
   MethodOutput out;
@@ -363,7 +420,7 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
     // As paco_reconstruct: repeated points left out, dense inputs thinned. Not with dataset
     // labels, which name the input's points. The time counts as the segmentation's.
     pcl::PointCloud<pcl::PointNormal> working;
-    const bool changed = !options.use_dataset_labels &&
+    const bool changed = !options.use_dataset_labels && !reads_input_labels &&
                          prepareScanPoints(input.input, options.max_input_points, working).changed();
     if (changed) {
       MethodInput prepared = input;

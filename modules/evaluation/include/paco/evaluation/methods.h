@@ -140,8 +140,8 @@ using MethodFunction = std::function<MethodOutput(const MethodInput&, const Meth
 /// Adds (or replaces) a method by name, e.g. the full pipeline "paco" once paco::completion is
 /// built: registerMethod("paco", runPaco, true). `uses_assembler`: it is run once per assembler.
 void registerMethod(const std::string& name, MethodFunction method, bool uses_assembler);
-/// Names of the methods this build can run: direct, oracle, box-prior (need paco::segmentation and
-/// paco::assembly), paco (also needs paco::completion), poisson-qem (needs CGAL), sanity, plus
+/// Names of the methods this build can run: direct, oracle, oracle-seen-hull, box-prior (need
+/// paco::segmentation and paco::assembly), paco (also needs paco::completion), poisson-qem (needs CGAL), sanity, plus
 /// registered ones.
 std::vector<std::string> availableMethods();
 /// The methods the evaluation knows of, built or not (for messages).
