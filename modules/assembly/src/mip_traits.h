@@ -16,6 +16,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,6 +33,18 @@ struct MipSettings {
   /// a MIP start (empty: none). NaN entries and the variables after them are completed by CBC;
   /// GLPK ignores the start.
   std::vector<double> start;
+  /// The caller holds a surface of its own to return when the solve gives none (PolyFit's warm
+  /// start): an isolated CBC that runs past its limit is then stopped sooner (see kill grace).
+  bool has_fallback = false;
+  /// When set, the solve gets at most the time left until then: building the program inside
+  /// CGAL, after `seconds` was set, takes seconds on large ones and counts against the budget.
+  std::optional<std::chrono::steady_clock::time_point> deadline;
+
+  /// `seconds`, or less when the deadline is nearer.
+  double secondsLeft() const {
+    if (!deadline) return seconds;
+    return std::min(seconds, std::chrono::duration<double>(*deadline - std::chrono::steady_clock::now()).count());
+  }
 };
 
 struct MipOutcome {
@@ -132,13 +145,23 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     outcome.num_variables = static_cast<std::size_t>(program.num_columns);
     outcome.num_constraints = static_cast<std::size_t>(program.num_rows);
 
-    const MipSettings& settings = mipSettings();
+    MipSettings settings = mipSettings();
+    settings.seconds = settings.secondsLeft();
+    if (settings.seconds <= 0.0) {
+      outcome.hit_time_limit = true;
+      Base::error_message_ = outcome.message =
+          "building the binary program used up the time limit before CBC could start; raise it or use the "
+          "cell-complex backend";
+      return false;
+    }
     CbcRun run;
     if (settings.isolate) {
       // A hard wall-clock bound as well, in case CBC overruns its own limit.
       const auto began = std::chrono::steady_clock::now();
       auto solveInChild = [&](const MipSettings& s) {
-        const double grace = std::max(10.0, 0.5 * s.seconds);
+        // CBC checks its limit only between phases (its root LP alone can take seconds). Past it,
+        // a late solution is worth waiting for only when the caller has nothing else to return.
+        const double grace = s.has_fallback ? std::max(0.5, 0.25 * s.seconds) : std::max(10.0, 0.5 * s.seconds);
         return runInChildProcess([&] { return solveWithCbc(program, s).serialise(); }, s.seconds + grace);
       };
       ChildProcessResult child = solveInChild(settings);
@@ -307,7 +330,8 @@ class Glpk_timed_mixed_integer_program_traits : public CGAL::Mixed_integer_progr
       }
       glp_set_mat_col(lp, c + 1, static_cast<int>(index.size()) - 1, index.data(), value.data());
     }
-    const MipSettings& settings = mipSettings();
+    MipSettings settings = mipSettings();
+    settings.seconds = std::max(0.0, settings.secondsLeft());
     glp_iocp parameters;
     glp_init_iocp(&parameters);
     parameters.msg_lev = settings.verbose ? GLP_MSG_ON : GLP_MSG_OFF;

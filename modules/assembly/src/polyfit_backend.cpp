@@ -250,12 +250,15 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
 
   mipSettings() = MipSettings{};
   mipSettings().seconds = left;
+  mipSettings().deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                                  std::chrono::duration<double>(left));
   mipSettings().verbose = options.verbose;
   // The candidate faces, copied once for the start and the count (reconstruct() leaves them as they are).
   CgalMesh candidates;
   reconstruction->output_candidate_faces(candidates);
   if (options.start_solid && !options.start_solid->faces.empty()) {
     mipSettings().start = facesOnSolidBoundary(candidates, *options.start_solid, rotation.transpose());
+    mipSettings().has_fallback = true;  // the assembler returns the start's surface if CBC gives nothing
     outcome.start_faces_released = releaseFacesAtForbiddenEdges(candidates, mipSettings().start, kReleaseRings);
     outcome.start_faces =
         static_cast<std::size_t>(std::count(mipSettings().start.begin(), mipSettings().start.end(), 1.0));
