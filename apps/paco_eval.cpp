@@ -75,7 +75,8 @@ void printHelp(const po::options_description& visible) {
             << "cases are skipped) and OUT_DIR/results.md (tables per level and overall). A case fails when\n"
             << "it has no mesh, an empty, open, non-manifold or non-oriented one, runs out of time or\n"
             << "throws; it is then scored as the failure box. Methods: direct, oracle, oracle-seen-hull,\n"
-            << "poisson-qem, box-prior, sanity (every case scored as failed), paco (when the learned stages are built).\n"
+            << "poisson-qem, box-prior, sanity (every case scored as failed), paco (when the learned\n"
+            << "stages are built).\n"
             << "Available in this build: " << boost::algorithm::join(ev::availableMethods(), ", ") << "\n\n"
             << visible << std::endl;
 }

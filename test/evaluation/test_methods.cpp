@@ -193,6 +193,12 @@ TEST(OracleSeenHull, KeepsTheSeenFacesAndTheHullAndClosesOverAnUnseenNotch) {
   EXPECT_EQ(out.planes.size(), 8u);
   EXPECT_NEAR(paco::signedVolume(out.mesh), h * (a * a - (a - b) * (a - b)), 0.01 * a * a * h);
 
+  in.input_labels_from_segmenter = true;  // segment ids, not GT faces: the method refuses them
+  out = ev::runMethod("oracle-seen-hull", in, options);
+  EXPECT_EQ(out.reason, ev::FailureReason::Threw);
+  EXPECT_NE(out.message.find("PlanarSegmenter"), std::string::npos) << out.message;
+
+  in.input_labels_from_segmenter = false;
   in.input_labels.pop_back();  // a label short: the method says so, and the case fails
   out = ev::runMethod("oracle-seen-hull", in, options);
   EXPECT_EQ(out.reason, ev::FailureReason::Threw);

@@ -76,6 +76,7 @@ EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_
   if (options.drop_input_normals)
     for (auto& p : in.input) p.normal_x = p.normal_y = p.normal_z = 0.0f;
   in.input_labels = sample.input_labels;
+  in.input_labels_from_segmenter = sample.input_labels_from_segmenter;
   in.gt_points = sample.gt_points;
   in.gt_labels = sample.gt_labels;
   in.gt_planes = sample.gt_planes;

@@ -156,6 +156,9 @@ std::map<std::string, Entry>& registry() {
 // points: a perfect completion of every seen face and of the part's hull that guesses no hidden
 // concavity (pocket, step, slot). What a method that infers nothing it cannot see can score.
 [[maybe_unused]] std::vector<PlanarPrimitive> seenAndHullOraclePrimitives(const MethodInput& in) {
+  if (in.input_labels_from_segmenter)
+    throw InvalidInputError("oracle-seen-hull needs the GT face of every input point, and this dataset's input labels "
+                            "come from a PlanarSegmenter; build the dataset without --segment");
   if (in.input_labels.size() != in.input.size())
     throw InvalidInputError("oracle-seen-hull needs the GT face of every input point; the sample has " +
                             std::to_string(in.input_labels.size()) + " labels for " + std::to_string(in.input.size()) +

@@ -24,6 +24,9 @@ namespace paco::evaluation {
 struct MethodInput {
   pcl::PointCloud<pcl::PointNormal> input;  ///< the partial scan, with normals
   std::vector<int> input_labels;            ///< per input point: its segment in the dataset (-1 none); may be empty
+  /// The dataset's input labels come from a PlanarSegmenter, not from the GT faces of the points
+  /// (`paco_dataset --segment`); oracle-seen-hull needs GT faces.
+  bool input_labels_from_segmenter = false;
   pcl::PointCloud<pcl::PointNormal> gt_points;  ///< GT surface points (oracle only)
   std::vector<int> gt_labels;               ///< per GT point: index into gt_planes (oracle only)
   std::vector<Plane> gt_planes;             ///< the complete set of GT planes (oracle only)
@@ -141,8 +144,8 @@ using MethodFunction = std::function<MethodOutput(const MethodInput&, const Meth
 /// built: registerMethod("paco", runPaco, true). `uses_assembler`: it is run once per assembler.
 void registerMethod(const std::string& name, MethodFunction method, bool uses_assembler);
 /// Names of the methods this build can run: direct, oracle, oracle-seen-hull, box-prior (need
-/// paco::segmentation and paco::assembly), paco (also needs paco::completion), poisson-qem (needs CGAL), sanity, plus
-/// registered ones.
+/// paco::segmentation and paco::assembly), paco (also needs paco::completion), poisson-qem (needs
+/// CGAL), sanity, plus registered ones.
 std::vector<std::string> availableMethods();
 /// The methods the evaluation knows of, built or not (for messages).
 std::vector<std::string> knownMethods();
