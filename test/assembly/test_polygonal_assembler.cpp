@@ -403,6 +403,35 @@ TEST(PolyFit, ATimeOutReturnsTheWarmStartsSurface) {
   EXPECT_GT(paco::signedVolume(mesh), 0.0);
 }
 
+// A unit cube whose points stop short of its edges (the central 90 % x 90 % of each face, as when
+// a scanner misses the edges): PolyFit's energy prefers no face at all there. The assembler
+// returns its warm start's cube instead of failing.
+TEST(PolyFit, AnEmptyOptimumReturnsTheWarmStartsSurface) {
+  std::mt19937 random(3);
+  const Eigen::Vector3d lo(0.05, 0.05, 0.05), hi(0.95, 0.95, 0.95);
+  std::vector<PlanarPrimitive> primitives;
+  for (int axis = 0; axis < 3; ++axis) {
+    primitives.push_back(paco::test::coveredAxisPlane(axis, 0.0, -1.0, lo, hi, 100, random));
+    primitives.push_back(paco::test::coveredAxisPlane(axis, 1.0, 1.0, lo, hi, 100, random));
+  }
+  paco::PolygonalAssembler without_start;
+  without_start.setInputPrimitives(primitives);
+  without_start.setWarmStart(false);
+  SurfaceMesh nothing;
+  EXPECT_EQ(without_start.reconstruct(nothing).status, paco::AssemblyStatus::EmptySolution);
+
+  paco::PolygonalAssembler assembler;
+  assembler.setInputPrimitives(primitives);
+  SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+  EXPECT_TRUE(result.returned_warm_start);
+  EXPECT_FALSE(result.hit_time_limit);
+  EXPECT_NE(result.message.find("empty surface"), std::string::npos) << result.message;
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  EXPECT_NEAR(paco::signedVolume(mesh), 1.0, 1e-3);
+}
+
 // A box and a small patch of a plane that touches it only at one corner (or along one edge).
 std::vector<PlanarPrimitive> boxWithAPlaneThrough(const Eigen::Vector3d& normal, const Eigen::Vector3d& corner,
                                                   const std::function<Eigen::Vector3d(double, double)>& patch_point) {

@@ -443,11 +443,13 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     outcome = detail::runPolyFit(separated, options, mesh);
     result_.num_warm_start_faces = outcome.start_faces;
     result_.num_warm_start_faces_released = outcome.start_faces_released;
-    // A time-out or a solver failure returns the start rather than nothing, also when CBC could
-    // not complete it into a solution of its own program: the start is a closed surface of the
-    // same planes.
+    // A time-out, a solver failure or an empty optimum returns the start rather than nothing,
+    // also when CBC could not complete it into a solution of its own program: the start is a
+    // closed surface of the same planes. (PolyFit's energy can prefer no face at all, e.g. on a
+    // box whose points stop short of its edges.)
     const bool timed_out = outcome.status == AssemblyStatus::TimeLimit;
-    if ((timed_out || outcome.status == AssemblyStatus::SolverFailed) && !start_solid.faces.empty() &&
+    const bool empty = outcome.status == AssemblyStatus::EmptySolution;
+    if ((timed_out || empty || outcome.status == AssemblyStatus::SolverFailed) && !start_solid.faces.empty() &&
         !interruptRequested()) {
       const std::string why = outcome.message;
       mesh = start_solid;
@@ -456,10 +458,16 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       outcome.dropped_for_budget.clear();  // the start was made from every primitive
       outcome.hit_time_limit = timed_out;
       result_.returned_warm_start = true;
-      result_.message =
-          timed_out ? "PolyFit found no solution within the time limit; the surface of its warm start (the cell "
-                      "complex) is returned; a longer time limit may let PolyFit finish."
-                    : "PolyFit failed (" + why + "); the surface of its warm start (the cell complex) is returned.";
+      if (timed_out)
+        result_.message =
+            "PolyFit found no solution within the time limit; the surface of its warm start (the cell complex) is "
+            "returned; a longer time limit may let PolyFit finish.";
+      else if (empty)
+        result_.message =
+            "PolyFit's optimum is the empty surface (its energy prefers no face to faces its points cover only in "
+            "part); the surface of its warm start (the cell complex) is returned.";
+      else
+        result_.message = "PolyFit failed (" + why + "); the surface of its warm start (the cell complex) is returned.";
     }
     if (!outcome.dropped_for_budget.empty()) {
       // used_[j] is the j-th primitive kept by pre-processing, in input order.
