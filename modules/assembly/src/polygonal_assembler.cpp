@@ -445,8 +445,8 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     result_.num_warm_start_faces_released = outcome.start_faces_released;
     // A time-out, a solver failure or an empty optimum returns the start rather than nothing,
     // also when CBC could not complete it into a solution of its own program: the start is a
-    // closed surface of the same planes. (PolyFit's energy can prefer no face at all, e.g. on a
-    // box whose points stop short of its edges.)
+    // closed surface of the same planes. (PolyFit's energy can prefer no face at all, e.g. with a
+    // large complexity weight.)
     const bool timed_out = outcome.status == AssemblyStatus::TimeLimit;
     const bool empty = outcome.status == AssemblyStatus::EmptySolution;
     if ((timed_out || empty || outcome.status == AssemblyStatus::SolverFailed) && !start_solid.faces.empty() &&
@@ -464,8 +464,8 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
             "returned; a longer time limit may let PolyFit finish.";
       else if (empty)
         result_.message =
-            "PolyFit's optimum is the empty surface (its energy prefers no face to faces its points cover only in "
-            "part); the surface of its warm start (the cell complex) is returned.";
+            "PolyFit's optimum is the empty surface (with these weights its energy prefers no face at all); the "
+            "surface of its warm start (the cell complex) is returned.";
       else
         result_.message = "PolyFit failed (" + why + "); the surface of its warm start (the cell complex) is returned.";
     }
