@@ -16,7 +16,6 @@
 #include <cfloat>
 #include <cmath>
 #include <cstring>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -24,7 +23,9 @@
 namespace paco::detail {
 
 struct MipSettings {
-  double seconds = 60.0;  ///< wall-clock budget of the solve
+  /// The solve ends by then. Building the program inside CGAL, after the caller set it, takes
+  /// seconds on large ones and counts against the budget.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   bool verbose = false;   ///< let the solver print its log
   /// Run CBC in a child process: a failed assertion inside Clp (seen on degenerate programs)
   /// then fails this solve instead of aborting the caller.
@@ -36,14 +37,9 @@ struct MipSettings {
   /// The caller holds a surface of its own to return when the solve gives none (PolyFit's warm
   /// start): an isolated CBC that runs past its limit is then stopped sooner (see kill grace).
   bool has_fallback = false;
-  /// When set, the solve gets at most the time left until then: building the program inside
-  /// CGAL, after `seconds` was set, takes seconds on large ones and counts against the budget.
-  std::optional<std::chrono::steady_clock::time_point> deadline;
 
-  /// `seconds`, or less when the deadline is nearer.
   double secondsLeft() const {
-    if (!deadline) return seconds;
-    return std::min(seconds, std::chrono::duration<double>(*deadline - std::chrono::steady_clock::now()).count());
+    return std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
   }
 };
 
@@ -145,9 +141,9 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     outcome.num_variables = static_cast<std::size_t>(program.num_columns);
     outcome.num_constraints = static_cast<std::size_t>(program.num_rows);
 
-    MipSettings settings = mipSettings();
-    settings.seconds = settings.secondsLeft();
-    if (settings.seconds <= 0.0) {
+    const MipSettings& settings = mipSettings();
+    const double seconds = settings.secondsLeft();  // this solve's budget
+    if (seconds <= 0.0) {
       outcome.hit_time_limit = true;
       Base::error_message_ = outcome.message =
           "building the binary program used up the time limit before CBC could start; raise it or use the "
@@ -158,19 +154,19 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     if (settings.isolate) {
       // A hard wall-clock bound as well, in case CBC overruns its own limit.
       const auto began = std::chrono::steady_clock::now();
-      auto solveInChild = [&](const MipSettings& s) {
+      auto solveInChild = [&](const MipSettings& s, double budget) {
         // CBC checks its limit only between phases (its root LP alone can take seconds). Past it,
         // a late solution is worth waiting for only when the caller has nothing else to return.
-        const double grace = s.has_fallback ? std::max(0.5, 0.25 * s.seconds) : std::max(10.0, 0.5 * s.seconds);
-        return runInChildProcess([&] { return solveWithCbc(program, s).serialise(); }, s.seconds + grace);
+        const double grace = s.has_fallback ? std::max(0.5, 0.25 * budget) : std::max(10.0, 0.5 * budget);
+        return runInChildProcess([&] { return solveWithCbc(program, s, budget).serialise(); }, budget + grace);
       };
-      ChildProcessResult child = solveInChild(settings);
+      ChildProcessResult child = solveInChild(settings, seconds);
       if (!child.ok && !child.timed_out && !child.interrupted && !settings.start.empty()) {
         // CBC's MIP-start path trips a Clp assertion on a few programs: solve again without it.
         MipSettings cold = settings;
         cold.start.clear();
-        cold.seconds -= std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-        if (cold.seconds > 0.0) child = solveInChild(cold);
+        const double left = seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+        if (left > 0.0) child = solveInChild(cold, left);
       }
       if (!child.ok || !run.deserialise(child.output, program.num_columns)) {
         outcome.hit_time_limit = child.timed_out;
@@ -181,7 +177,7 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
         return false;
       }
     } else {
-      run = solveWithCbc(program, settings);
+      run = solveWithCbc(program, settings, seconds);
     }
     outcome.optimal = run.optimal;
     outcome.hit_time_limit = run.hit_time_limit;
@@ -199,7 +195,7 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     } else if (run.infeasible) {
       outcome.message = "CBC: the binary program is infeasible";
     } else if (outcome.hit_time_limit) {
-      outcome.message = "CBC found no feasible solution in the " + std::to_string(settings.seconds) +
+      outcome.message = "CBC found no feasible solution in the " + std::to_string(seconds) +
                         " s left of the time limit; raise it or use the cell-complex backend";
     } else {
       outcome.message = "CBC stopped without a solution (status " + std::to_string(run.status) +
@@ -241,7 +237,7 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     }
   };
 
-  static CbcRun solveWithCbc(const ColumnProgram<FT>& program, const MipSettings& settings) {
+  static CbcRun solveWithCbc(const ColumnProgram<FT>& program, const MipSettings& settings, double seconds) {
     CbcRun run;
     Cbc_Model* model = Cbc_newModel();
     if (!model) throw std::runtime_error("CBC: cannot create a model");
@@ -252,7 +248,7 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     for (int i = 0; i < program.num_columns; ++i)
       if (program.is_integer[i]) Cbc_setInteger(model, i);
     Cbc_setObjSense(model, program.minimize ? 1.0 : -1.0);
-    Cbc_setMaximumSeconds(model, std::max(0.01, settings.seconds));
+    Cbc_setMaximumSeconds(model, std::max(0.01, seconds));
     Cbc_setLogLevel(model, settings.verbose ? 1 : 0);
     if (!settings.verbose) Cbc_setParameter(model, "log", "0");
     if (!settings.start.empty() && settings.start.size() <= static_cast<std::size_t>(program.num_columns)) {
@@ -272,7 +268,7 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     // When the time limit cuts CBC's pre-processing short, its cut generators can report a feasible
     // program infeasible (seen on PolyFit programs, which the empty surface always satisfies): a
     // verdict reached with the time used up is a time-out, not a proof.
-    if (run.infeasible && !best && elapsed >= settings.seconds) {
+    if (run.infeasible && !best && elapsed >= seconds) {
       run.infeasible = false;
       run.hit_time_limit = true;
     }
@@ -330,13 +326,13 @@ class Glpk_timed_mixed_integer_program_traits : public CGAL::Mixed_integer_progr
       }
       glp_set_mat_col(lp, c + 1, static_cast<int>(index.size()) - 1, index.data(), value.data());
     }
-    MipSettings settings = mipSettings();
-    settings.seconds = std::max(0.0, settings.secondsLeft());
+    const MipSettings& settings = mipSettings();
+    const double seconds = std::max(0.0, settings.secondsLeft());
     glp_iocp parameters;
     glp_init_iocp(&parameters);
     parameters.msg_lev = settings.verbose ? GLP_MSG_ON : GLP_MSG_OFF;
     parameters.presolve = GLP_ON;
-    parameters.tm_lim = static_cast<int>(std::min(2.0e9, std::max(10.0, settings.seconds * 1000.0)));
+    parameters.tm_lim = static_cast<int>(std::min(2.0e9, std::max(10.0, seconds * 1000.0)));
     const int code = glp_intopt(lp, &parameters);
     const int status = glp_mip_status(lp);
     outcome.hit_time_limit = code == GLP_ETMLIM;
@@ -353,7 +349,7 @@ class Glpk_timed_mixed_integer_program_traits : public CGAL::Mixed_integer_progr
       }
       ok = true;
     } else if (code == GLP_ETMLIM) {
-      outcome.message = "GLPK found no feasible solution in the " + std::to_string(settings.seconds) +
+      outcome.message = "GLPK found no feasible solution in the " + std::to_string(seconds) +
                         " s left of the time limit (try --solver cbc)";
     } else if (status == GLP_NOFEAS || code == GLP_ENOPFS) {
       outcome.message = "GLPK: the binary program is infeasible";

@@ -249,7 +249,6 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   }
 
   mipSettings() = MipSettings{};
-  mipSettings().seconds = left;
   mipSettings().deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                                   std::chrono::duration<double>(left));
   mipSettings().verbose = options.verbose;

@@ -21,6 +21,8 @@
 
 #include <pcl/kdtree/kdtree_flann.h>
 
+#include <boost/algorithm/string/join.hpp>
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
@@ -410,7 +412,7 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
       else if (name == "direct" || name == "oracle" || name == "oracle-seen-hull" || name == "box-prior")
         why += ": it needs paco::assembly (and paco::segmentation)";
       else if (name == "poisson-qem") why += ": it needs CGAL (PACO_WITH_CGAL=ON)";
-      else why += "; known methods: direct, oracle, oracle-seen-hull, poisson-qem, box-prior, paco, sanity";
+      else why += "; known methods: " + boost::algorithm::join(knownMethods(), ", ");
       throw InvalidInputError(why);
     }
     function = it->second.function;
