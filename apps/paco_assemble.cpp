@@ -100,7 +100,7 @@ int run(int argc, char** argv) {
       ("complexity", po::value(&complexity)->default_value(complexity, shortNumber(complexity)),
        "polyfit complexity weight (>= 0)")
       ("smoothness", po::value(&smoothness)->default_value(smoothness, shortNumber(smoothness)),
-       "cell-complex area weight (> 0)")
+       "cell-complex area weight (> 0); halved, down to 1/64, when it leaves no solid")
       ("min-support", po::value(&min_support)->default_value(min_support), "drop primitives with fewer points (>= 3)")
       ("merge-angle", po::value(&merge_angle)->default_value(merge_angle, shortNumber(merge_angle)),
        "merge near-duplicate planes closer than this angle (degrees) ...")
@@ -177,7 +177,7 @@ int run(int argc, char** argv) {
     std::printf("cell-complex: %zu cells (%.3f s), %zu cell faces, labelling and mesh %.3f s\n", result.num_cells,
                 result.seconds_partition, result.num_candidate_faces, result.seconds_solve);
   }
-  if (result.returned_warm_start)
+  if (!result.message.empty())
     std::printf("note: %s\n", result.message.c_str());
   else if (result.hit_time_limit)
     std::printf("note: the time limit was reached; the best solution found is used\n");

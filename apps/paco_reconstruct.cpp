@@ -202,7 +202,7 @@ int run(int argc, char** argv) {
                       (result.message.empty() ? "" : ": " + result.message));
   std::printf("assemble (%s): %zu faces, %zu vertices, %s\n", o.assembler.c_str(), mesh.faces.size(),
               mesh.vertices.size(), result.topology.describe().c_str());
-  if (result.returned_warm_start) std::printf("  note: %s\n", result.message.c_str());
+  if (!result.message.empty()) std::printf("  note: %s\n", result.message.c_str());
   if (result.num_merged || result.num_dropped) {
     // Say why primitives were not used, so that a surprising mesh can be traced to its cause.
     std::printf("  %zu of %zu primitives used: %zu merged as near-duplicates, %zu with too few points dropped, "

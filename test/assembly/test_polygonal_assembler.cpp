@@ -458,6 +458,55 @@ TEST(PolyFit, AnEmptyOptimumReturnsTheWarmStartsSurface) {
   EXPECT_NEAR(paco::signedVolume(mesh), 1.0, 1e-3);
 }
 
+// Points on a fifth of each face's width (4 % of its area, as a scanner's sparse patches): their
+// votes weigh less than the cube's area term, and the min-cut at the set smoothness labels every
+// cell outside. The assembler then labels with weaker smoothing and says so; PolyFit, whose own
+// optimum is empty here too, returns that cube as its start's surface.
+TEST(CellComplex, ACubeWhosePointsCoverLittleOfEachFaceStillGivesTheCube) {
+  for (const auto backend : {paco::AssemblyBackend::CellComplex, paco::AssemblyBackend::PolyFit}) {
+    SCOPED_TRACE(paco::toString(backend));
+    paco::PolygonalAssembler assembler;
+    assembler.setBackend(backend);
+    assembler.setInputPrimitives(cubeWithFacesCoveredTo(0.2, 5));
+    SurfaceMesh mesh;
+    const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+    ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+    EXPECT_NEAR(paco::signedVolume(mesh), 1.0, 1e-3);
+    EXPECT_LT(result.smoothness_used, assembler.getSmoothness());
+    EXPECT_GT(result.smoothness_used, 0.0);
+    EXPECT_NE(result.message.find("labelled every cell outside"), std::string::npos) << result.message;
+  }
+  // Half the width (a quarter of the area) outweighs the area term: the set smoothness is kept.
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend(paco::AssemblyBackend::CellComplex);
+  assembler.setInputPrimitives(cubeWithFacesCoveredTo(0.5, 5));
+  SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << result.message;
+  EXPECT_EQ(result.smoothness_used, assembler.getSmoothness());
+  EXPECT_TRUE(result.message.empty()) << result.message;
+}
+
+// The same sparse patches with their normals facing into the cube describe no solid. Weaker
+// smoothing would label the box around the cube inside (a shell reaching the box's walls); that
+// is not kept, and the assembler fails as before.
+TEST(CellComplex, SparsePatchesFacingInwardStillFail) {
+  std::mt19937 random(5);
+  const Eigen::Vector3d lo = Eigen::Vector3d::Constant(0.4), hi = Eigen::Vector3d::Constant(0.6);
+  std::vector<PlanarPrimitive> inward;
+  for (int axis = 0; axis < 3; ++axis) {
+    inward.push_back(paco::test::coveredAxisPlane(axis, 0.0, 1.0, lo, hi, 100, random));
+    inward.push_back(paco::test::coveredAxisPlane(axis, 1.0, -1.0, lo, hi, 100, random));
+  }
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend(paco::AssemblyBackend::CellComplex);
+  assembler.setInputPrimitives(inward);
+  SurfaceMesh mesh;
+  EXPECT_EQ(assembler.reconstruct(mesh).status, paco::AssemblyStatus::EmptySolution);
+  EXPECT_TRUE(mesh.faces.empty());
+}
+
 // A box and a small patch of a plane that touches it only at one corner (or along one edge).
 std::vector<PlanarPrimitive> boxWithAPlaneThrough(const Eigen::Vector3d& normal, const Eigen::Vector3d& corner,
                                                   const std::function<Eigen::Vector3d(double, double)>& patch_point) {

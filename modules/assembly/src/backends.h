@@ -17,6 +17,9 @@ struct BackendOutcome {
   double seconds_partition = 0.0, seconds_solve = 0.0;
   std::size_t num_candidate_faces = 0, num_cells = 0, num_variables = 0, num_constraints = 0;
   int crossings_resolved = 0;  ///< cell-complex: cells relabelled to remove non-manifold "X" edges
+  /// cell-complex: the area weight of the labelling kept (below the one asked for when that one
+  /// labelled every cell outside).
+  double smoothness_used = 0.0;
   /// polyfit: primitives left out to keep the candidate faces within the budget (indices into
   /// the backend's input, least confident first).
   std::vector<std::size_t> dropped_for_budget;

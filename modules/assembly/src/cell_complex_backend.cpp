@@ -38,6 +38,8 @@ constexpr double kOnPlane = 1e-9;      // classification tolerance (normalised u
 constexpr double kMinArea = 1e-14;     // faces smaller than this are dropped
 constexpr double kVoteOffset = 1e-6;   // how far off its plane a point is moved to find its cells
 constexpr double kWeldTolerance = 1e-8;
+// An empty labelling is retried with the smoothness halved up to this many times (down to 1/64).
+constexpr int kSmoothnessHalvings = 6;
 
 struct Face {
   std::vector<Eigen::Vector3d> polygon;  // counter-clockwise seen from outside the cell
@@ -679,36 +681,32 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
                         property<vertex_distance_t, long, property<vertex_predecessor_t, Traits::edge_descriptor>>>>,
       property<edge_capacity_t, double,
                property<edge_residual_capacity_t, double, property<edge_reverse_t, Traits::edge_descriptor>>>>;
-  Graph graph(static_cast<std::size_t>(num_cells) + 2);
-  const auto source = static_cast<Traits::vertex_descriptor>(num_cells);
-  const auto sink = static_cast<Traits::vertex_descriptor>(num_cells + 1);
-  auto capacity = get(edge_capacity, graph);
-  auto reverse = get(edge_reverse, graph);
-  auto addEdge = [&](Traits::vertex_descriptor u, Traits::vertex_descriptor v, double forward, double backward) {
-    const auto e = add_edge(u, v, graph).first;
-    const auto r = add_edge(v, u, graph).first;
-    capacity[e] = forward;
-    capacity[r] = backward;
-    reverse[e] = r;
-    reverse[r] = e;
-  };
-  const double beta = options.smoothness;
-  for (int c = 0; c < num_cells; ++c) {
-    addEdge(source, static_cast<Traits::vertex_descriptor>(c), cost_outside[c], 0.0);
-    addEdge(static_cast<Traits::vertex_descriptor>(c), sink, cost_inside[c] + beta * box_area[c], 0.0);
-  }
-  for (const auto& adjacency : adjacencies)
-    addEdge(static_cast<Traits::vertex_descriptor>(adjacency.a), static_cast<Traits::vertex_descriptor>(adjacency.b),
-            beta * adjacency.area, beta * adjacency.area);
-  boykov_kolmogorov_max_flow(graph, source, sink);
-  auto color = get(vertex_color, graph);
-  std::vector<bool> inside(num_cells);
-  int num_inside = 0;
-  for (int c = 0; c < num_cells; ++c) {
-    inside[c] = get(color, static_cast<Traits::vertex_descriptor>(c)) == black_color;
-    num_inside += inside[c];
-  }
-  if (options.resolve_crossings) {
+  auto label = [&](double beta, std::vector<bool>& inside) {
+    Graph graph(static_cast<std::size_t>(num_cells) + 2);
+    const auto source = static_cast<Traits::vertex_descriptor>(num_cells);
+    const auto sink = static_cast<Traits::vertex_descriptor>(num_cells + 1);
+    auto capacity = get(edge_capacity, graph);
+    auto reverse = get(edge_reverse, graph);
+    auto addEdge = [&](Traits::vertex_descriptor u, Traits::vertex_descriptor v, double forward, double backward) {
+      const auto e = add_edge(u, v, graph).first;
+      const auto r = add_edge(v, u, graph).first;
+      capacity[e] = forward;
+      capacity[r] = backward;
+      reverse[e] = r;
+      reverse[r] = e;
+    };
+    for (int c = 0; c < num_cells; ++c) {
+      addEdge(source, static_cast<Traits::vertex_descriptor>(c), cost_outside[c], 0.0);
+      addEdge(static_cast<Traits::vertex_descriptor>(c), sink, cost_inside[c] + beta * box_area[c], 0.0);
+    }
+    for (const auto& adjacency : adjacencies)
+      addEdge(static_cast<Traits::vertex_descriptor>(adjacency.a), static_cast<Traits::vertex_descriptor>(adjacency.b),
+              beta * adjacency.area, beta * adjacency.area);
+    boykov_kolmogorov_max_flow(graph, source, sink);
+    auto color = get(vertex_color, graph);
+    inside.assign(num_cells, false);
+    for (int c = 0; c < num_cells; ++c) inside[c] = get(color, static_cast<Traits::vertex_descriptor>(c)) == black_color;
+    if (!options.resolve_crossings) return;
     std::vector<std::vector<std::pair<int, double>>> neighbours(num_cells);
     for (const auto& adjacency : adjacencies) {
       neighbours[adjacency.a].push_back({adjacency.b, beta * adjacency.area});
@@ -728,9 +726,28 @@ BackendOutcome runCellComplex(const std::vector<PlanarPrimitive>& primitives, co
     outcome.crossings_resolved = resolveEdgeCrossings(cells, neighbours, flip_cost, inside);
     outcome.crossings_resolved += repairByRelabelling(cells, adjacencies, num_primitives, flip_cost,
                                                      [&] { return secondsSince(start) > options.seconds; }, inside);
-    num_inside = static_cast<int>(std::count(inside.begin(), inside.end(), true));
+  };
+  auto none = [](const std::vector<bool>& inside) { return std::find(inside.begin(), inside.end(), true) == inside.end(); };
+
+  std::vector<bool> inside;
+  outcome.smoothness_used = options.smoothness;
+  label(options.smoothness, inside);
+  // Points that cover little of each face (a scanner's patches, points stopping short of the
+  // edges) vote with little area against the whole surface's area term, and the cut can then
+  // prefer no solid at all. Weaker smoothing is tried before giving up, but a solid that reaches
+  // the box's walls is not kept: it is the outside of inward-facing normals, not a part.
+  for (int halvings = 1; none(inside) && halvings <= kSmoothnessHalvings; ++halvings) {
+    const double beta = options.smoothness * std::ldexp(1.0, -halvings);
+    std::vector<bool> attempt;
+    label(beta, attempt);
+    if (none(attempt)) continue;
+    bool reaches_box = false;
+    for (int c = 0; c < num_cells; ++c) reaches_box = reaches_box || (attempt[c] && box_area[c] > 0.0);
+    if (reaches_box) break;
+    inside = std::move(attempt);
+    outcome.smoothness_used = beta;
   }
-  if (num_inside == 0) {
+  if (none(inside)) {
     outcome.status = AssemblyStatus::EmptySolution;
     outcome.message = "the min-cut labelled every cell outside: the points' normals do not describe a solid";
     return outcome;

@@ -32,6 +32,14 @@ double nowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+std::string loweredSmoothnessNote(double asked, double used) {
+  std::ostringstream note;
+  note << "The cell complex labelled every cell outside with smoothness " << asked
+       << " (its points cover too little of the planes' faces to outweigh their area); the solid was labelled with "
+       << used << ". Check that the points' normals face outwards.";
+  return note.str();
+}
+
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
@@ -423,6 +431,7 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     std::vector<PlanarPrimitive> separated = primitives;
     result_.num_planes_separated = separateConcurrentPlanes(separated);
     SurfaceMesh start_solid;
+    double start_smoothness = smoothness_;
     if (warm_start_ && solver_ == MipSolver::Cbc) {
       std::vector<PlanarPrimitive> refitted = separated;
       for (auto& primitive : refitted) primitive.plane = refit(primitive.points, primitive.plane);
@@ -437,6 +446,8 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       const detail::BackendOutcome start_outcome = detail::runCellComplex(refitted, cell_options, start_solid);
       if (start_outcome.status != AssemblyStatus::Success || !postProcess(start_solid).isClosedManifold())
         start_solid = SurfaceMesh{};
+      else
+        start_smoothness = start_outcome.smoothness_used;
       options.seconds = secondsLeft();
       if (!start_solid.faces.empty()) options.start_solid = &start_solid;
     }
@@ -468,6 +479,8 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
             "surface of its warm start (the cell complex) is returned.";
       else
         result_.message = "PolyFit failed (" + why + "); the surface of its warm start (the cell complex) is returned.";
+      result_.smoothness_used = start_smoothness;
+      if (start_smoothness < smoothness_) result_.message += " " + loweredSmoothnessNote(smoothness_, start_smoothness);
     }
     if (!outcome.dropped_for_budget.empty()) {
       // used_[j] is the j-th primitive kept by pre-processing, in input order.
@@ -532,6 +545,11 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
   result_.seconds_solve = outcome.seconds_solve;
   result_.num_cells = outcome.num_cells;
   result_.num_crossings_resolved = outcome.crossings_resolved;
+  if (backend_ == AssemblyBackend::CellComplex) {
+    result_.smoothness_used = outcome.smoothness_used;
+    if (outcome.status == AssemblyStatus::Success && outcome.smoothness_used < smoothness_)
+      result_.message = loweredSmoothnessNote(smoothness_, outcome.smoothness_used);
+  }
   result_.num_variables = outcome.num_variables;
   result_.num_constraints = outcome.num_constraints;
   if (outcome.status != AssemblyStatus::Success) fail(outcome.status, outcome.message);

@@ -204,7 +204,7 @@ std::map<std::string, Entry>& registry() {
     case AssemblyStatus::Success:
       out.has_mesh = true;
       out.mesh = std::move(mesh);
-      if (result.returned_warm_start)
+      if (!result.message.empty())
         out.message = result.message;
       else if (result.hit_time_limit)
         out.message = "time limit hit; the best solution found was used";

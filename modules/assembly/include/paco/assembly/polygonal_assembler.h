@@ -72,6 +72,10 @@ struct AssemblyResult {
   std::size_t num_candidate_faces = 0; ///< polyfit: candidate faces; cell-complex: cell faces
   std::size_t num_cells = 0;           ///< cell-complex: cells of the partition
   int num_crossings_resolved = 0;      ///< cell-complex: cells relabelled to remove non-manifold "X" edges
+  /// cell-complex (and PolyFit's warm start): the area weight the labelling kept was made with. It
+  /// is below setSmoothness()'s when that one labelled every cell outside, as when the points
+  /// cover little of each face; `message` then says so.
+  double smoothness_used = 0.0;
   std::size_t num_variables = 0, num_constraints = 0;  ///< polyfit: size of the MIP
   std::size_t num_warm_start_faces = 0;  ///< polyfit: candidate faces of the cell-complex start (0: none given)
   /// polyfit: shifts of a plane by 5e-5 of the diagonal, made so that no four planes meet in one
@@ -170,6 +174,8 @@ class PolygonalAssembler {
 
   /// Cell-complex: weight of the surface-area (smoothness) term relative to the point votes,
   /// > 0, default 0.2. Larger closes holes with fewer, larger faces; smaller follows the points.
+  /// When it labels every cell outside (points covering little of their faces) it is halved, down
+  /// to 1/64, until a solid clear of the bounding box's walls appears (AssemblyResult::smoothness_used).
   void setSmoothness(double beta);
   double getSmoothness() const { return smoothness_; }
   /// Cell-complex: how far a primitive's plane reaches beyond its points when it splits cells,
