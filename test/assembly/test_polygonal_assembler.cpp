@@ -417,19 +417,23 @@ std::vector<PlanarPrimitive> cubeWithFacesCoveredTo(double fraction, unsigned se
 }
 
 // Points that stop short of the edges, as a scanner leaves them. CGAL clips PolyFit's candidates
-// to the box of the (turned) points, the cube's corners stick out of it, and PolyFit alone finds
-// no closed surface (doc/assembly.md). With the defaults the assembler returns its warm start's
-// cube instead.
+// to the box of the turned points; with the large turn used before 2026-12-04 the cube's corners
+// stuck out of it and PolyFit alone found no closed surface (doc/assembly.md). With the small
+// turn PolyFit gives the cube itself, also without its warm start.
 TEST(PolyFit, ABoxWhosePointsStopShortOfItsEdgesStillGivesTheBox) {
-  for (double fraction : {0.9, 0.7}) {
-    SCOPED_TRACE(fraction);
-    paco::PolygonalAssembler assembler;
-    assembler.setInputPrimitives(cubeWithFacesCoveredTo(fraction, 3));
-    SurfaceMesh mesh;
-    const paco::AssemblyResult& result = assembler.reconstruct(mesh);
-    ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
-    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
-    EXPECT_NEAR(paco::signedVolume(mesh), 1.0, 1e-3);
+  for (double fraction : {0.9, 0.7, 0.2}) {
+    for (bool warm_start : {true, false}) {
+      SCOPED_TRACE(testing::Message() << "coverage " << fraction << (warm_start ? ", warm start" : ", no warm start"));
+      paco::PolygonalAssembler assembler;
+      assembler.setWarmStart(warm_start);
+      assembler.setInputPrimitives(cubeWithFacesCoveredTo(fraction, 3));
+      SurfaceMesh mesh;
+      const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+      ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+      EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+      EXPECT_NEAR(paco::signedVolume(mesh), 1.0, 1e-3);
+      EXPECT_FALSE(result.returned_warm_start) << result.message;
+    }
   }
 }
 
@@ -460,13 +464,15 @@ TEST(PolyFit, AnEmptyOptimumReturnsTheWarmStartsSurface) {
 
 // Points on a fifth of each face's width (4 % of its area, as a scanner's sparse patches): their
 // votes weigh less than the cube's area term, and the min-cut at the set smoothness labels every
-// cell outside. The assembler then labels with weaker smoothing and says so; PolyFit, whose own
-// optimum is empty here too, returns that cube as its start's surface.
+// cell outside. The assembler then labels with weaker smoothing and says so. PolyFit returns that
+// cube as its start's surface when its own optimum is empty (here forced by a complexity weight
+// that outweighs every face's support).
 TEST(CellComplex, ACubeWhosePointsCoverLittleOfEachFaceStillGivesTheCube) {
   for (const auto backend : {paco::AssemblyBackend::CellComplex, paco::AssemblyBackend::PolyFit}) {
     SCOPED_TRACE(paco::toString(backend));
     paco::PolygonalAssembler assembler;
     assembler.setBackend(backend);
+    if (backend == paco::AssemblyBackend::PolyFit) assembler.setComplexityWeight(100.0);
     assembler.setInputPrimitives(cubeWithFacesCoveredTo(0.2, 5));
     SurfaceMesh mesh;
     const paco::AssemblyResult& result = assembler.reconstruct(mesh);
@@ -476,6 +482,7 @@ TEST(CellComplex, ACubeWhosePointsCoverLittleOfEachFaceStillGivesTheCube) {
     EXPECT_LT(result.smoothness_used, assembler.getSmoothness());
     EXPECT_GT(result.smoothness_used, 0.0);
     EXPECT_NE(result.message.find("labelled every cell outside"), std::string::npos) << result.message;
+    EXPECT_EQ(result.returned_warm_start, backend == paco::AssemblyBackend::PolyFit);
   }
   // Half the width (a quarter of the area) outweighs the area term: the set smoothness is kept.
   paco::PolygonalAssembler assembler;

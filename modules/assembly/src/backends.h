@@ -31,7 +31,7 @@ struct BackendOutcome {
 
 struct PolyFitOptions {
   MipSolver solver = MipSolver::Cbc;
-  double wt_fitting = 0.43, wt_coverage = 0.27, wt_complexity = 0.30;
+  double wt_fitting = 0.43, wt_coverage = 0.15, wt_complexity = 0.30;
   double seconds = 60.0;  ///< budget for the whole backend call
   bool verbose = false;
   /// When the candidate faces exceed this (0: no limit), the least confident primitives with

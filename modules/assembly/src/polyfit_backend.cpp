@@ -40,11 +40,19 @@ using CgalMesh = CGAL::Surface_mesh<Point>;
 // CGAL 5.5's plane fit returns normals with ~1e-30 components for exactly axis-aligned point sets;
 // its three-plane intersections then depend on argument order and candidate generation runs away
 // (minutes, gigabytes). Turning the input by a fixed generic rotation avoids exact alignment; the
-// result is turned back. The angles are arbitrary but fixed, so results are reproducible.
+// result is turned back. The turn is small on purpose: CGAL clips the candidate faces to the
+// axis-aligned box of the turned points, enlarged by 2.5 % of its diagonal, and a corner of the
+// points' own box that no point reaches (faces sampled short of their edges, corners cut away)
+// sticks out of the turned points' box. When each face's points lie around its middle, by about
+// half a side times the largest sum of a row's off-diagonal entries of the turn: 0.048 for these
+// angles (1.5, 1.2 and 0.85 degrees), so 2.4 % of the side, inside the margin (4.3 % of a cube's
+// side). The turn used until 2026-12-04 (31, 24 and 17 degrees) clipped such corners, and
+// PolyFit then kept a sliver of the part, or nothing (doc/assembly.md). The angles are fixed, so
+// results are reproducible.
 Eigen::Matrix3d genericRotation() {
-  return (Eigen::AngleAxisd(0.5373, Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(0.4187, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(0.2953, Eigen::Vector3d::UnitX()))
+  return (Eigen::AngleAxisd(0.026865, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(0.020935, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(0.014765, Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
 }
 

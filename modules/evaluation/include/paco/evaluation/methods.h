@@ -58,7 +58,7 @@ struct MethodOptions {
   bool polyfit_warm_start = true;
   /// PolyFit's data-fitting, coverage and complexity weights (PolygonalAssembler::setFittingWeight
   /// and the others, whose defaults, CGAL's, these are; each >= 0, not all 0).
-  double polyfit_fitting = 0.43, polyfit_coverage = 0.27, polyfit_complexity = 0.30;
+  double polyfit_fitting = 0.43, polyfit_coverage = 0.15, polyfit_complexity = 0.30;
   /// Planar segmenter backend for the visible points of `direct`, `box-prior` and `paco`
   /// (default "gocopp").
   std::string segmenter = "gocopp";
