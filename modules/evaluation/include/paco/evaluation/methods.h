@@ -57,7 +57,7 @@ struct MethodOptions {
   /// default this is).
   bool polyfit_warm_start = true;
   /// PolyFit's data-fitting, coverage and complexity weights (PolygonalAssembler::setFittingWeight
-  /// and the others, whose defaults, CGAL's, these are; each >= 0, not all 0).
+  /// and the others, whose defaults these are; each >= 0, not all 0).
   double polyfit_fitting = 0.43, polyfit_coverage = 0.15, polyfit_complexity = 0.30;
   /// Planar segmenter backend for the visible points of `direct`, `box-prior` and `paco`
   /// (default "gocopp").
