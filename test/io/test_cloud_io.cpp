@@ -280,6 +280,91 @@ TEST(CloudIo, XyzAcceptsCommentsAndCommas) {
   EXPECT_FALSE(c.has_normals);
 }
 
+TEST(CloudIo, XyzAcceptsAnyMixOfCommasAndBlanks) {
+  TempDir dir;
+  writeBytes(dir.file("a.xyz"), "1, 2, 3\n4 ,5,\t6\n7\t8 , 9\r\n 10,11 12 \n");
+  const LabelledCloud c = paco::io::loadCloud(dir.file("a.xyz"));
+  ASSERT_EQ(c.points.size(), 4u);
+  EXPECT_EQ(c.points[0].y, 2.0f);
+  EXPECT_EQ(c.points[1].z, 6.0f);
+  EXPECT_EQ(c.points[2].y, 8.0f);
+  EXPECT_EQ(c.points[3].z, 12.0f);
+  // An empty value would shift the columns; a word is still not a number.
+  writeBytes(dir.file("b.xyz"), "1, 2, 3\n4,, 5, 6\n");
+  expectLoadError(dir.file("b.xyz"), "line 2 has an empty value");
+  writeBytes(dir.file("c.xyz"), "1, 2, 3,\n");
+  expectLoadError(dir.file("c.xyz"), "line 1 has an empty value");
+  writeBytes(dir.file("d.xyz"), "1, two, 3\n");
+  expectLoadError(dir.file("d.xyz"), "'two' on line 1 is not a number");
+}
+
+TEST(CloudIo, TextFilesMayStartWithUtf8ByteOrderMark) {
+  TempDir dir;
+  const std::string bom = "\xEF\xBB\xBF";
+  writeBytes(dir.file("a.xyz"), bom + "-0.5 2 3\n4 5 6\n");
+  const LabelledCloud xyz = paco::io::loadCloud(dir.file("a.xyz"));
+  ASSERT_EQ(xyz.points.size(), 2u);
+  EXPECT_EQ(xyz.points[0].x, -0.5f);
+
+  const LabelledCloud cloud = makeCloud(20, true, true);
+  paco::io::CloudWriteOptions ascii;
+  ascii.pcd_encoding = paco::io::PcdEncoding::Ascii;
+  ascii.ascii_ply = true;
+  for (const char* name : {"c.pcd", "c.ply"}) {
+    SCOPED_TRACE(name);
+    paco::io::saveCloud(dir.file(name), cloud, ascii);
+    writeBytes(dir.file(name), bom + readBytes(dir.file(name)));
+    expectSameCloud(cloud, paco::io::loadCloud(dir.file(name)));
+  }
+}
+
+TEST(CloudIo, NonFiniteNormalsReadAsMissingNormalsInEveryFormat) {
+  TempDir dir;
+  LabelledCloud cloud = makeCloud(50, true, true);
+  cloud.points[11].normal_x = std::numeric_limits<float>::quiet_NaN();
+  cloud.points[12].normal_z = -std::numeric_limits<float>::infinity();
+  struct Case {
+    const char* name;
+    paco::io::PcdEncoding encoding;
+    bool ascii_ply;
+  };
+  const Case cases[] = {{"ascii.pcd", paco::io::PcdEncoding::Ascii, false},
+                        {"binary.pcd", paco::io::PcdEncoding::Binary, false},
+                        {"compressed.pcd", paco::io::PcdEncoding::BinaryCompressed, false},
+                        {"ascii.ply", paco::io::PcdEncoding::Binary, true},
+                        {"binary.ply", paco::io::PcdEncoding::Binary, false},
+                        {"c.npy", paco::io::PcdEncoding::Binary, false},
+                        {"c.xyz", paco::io::PcdEncoding::Binary, false}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    paco::io::CloudWriteOptions options;
+    options.pcd_encoding = c.encoding;
+    options.ascii_ply = c.ascii_ply;
+    paco::io::saveCloud(dir.file(c.name), cloud, options);
+    const LabelledCloud read = paco::io::loadCloud(dir.file(c.name));  // the default rejects NaN points
+    ASSERT_EQ(read.points.size(), 50u);
+    EXPECT_TRUE(read.has_normals);
+    for (int i : {11, 12})
+      EXPECT_EQ(read.points[i].getNormalVector3fMap(), Eigen::Vector3f::Zero()) << "point " << i;
+    EXPECT_EQ(read.points[13].getNormalVector3fMap(), cloud.points[13].getNormalVector3fMap());
+  }
+}
+
+TEST(CloudIo, CloudWhoseNormalsAreAllNanOrZeroHasNoNormals) {
+  TempDir dir;
+  paco::io::CloudReadOptions drop;
+  drop.non_finite = paco::io::NonFinitePolicy::Drop;
+  writeBytes(dir.file("nan.xyz"), "1 2 3 nan nan nan\n4 5 6 nan nan nan\n7 8 9 0 0 inf\n");
+  for (const auto& options : {paco::io::CloudReadOptions{}, drop}) {
+    const LabelledCloud c = paco::io::loadCloud(dir.file("nan.xyz"), options);
+    ASSERT_EQ(c.points.size(), 3u);  // the coordinates are fine: no point is dropped
+    EXPECT_FALSE(c.has_normals);
+    for (const auto& p : c.points) EXPECT_EQ(p.getNormalVector3fMap(), Eigen::Vector3f::Zero());
+  }
+  writeBytes(dir.file("zero.xyz"), "1 2 3 0 0 0\n4 5 6 0 0 0\n7 8 9 0 0 0\n");
+  EXPECT_FALSE(paco::io::loadCloud(dir.file("zero.xyz")).has_normals);
+}
+
 // ---- errors: missing, empty, truncated, malformed, NaN, for each format family ----
 
 TEST(CloudIoErrors, MissingFileForEveryFormat) {
@@ -422,19 +507,20 @@ TEST(CloudIoErrors, NonFiniteCoordinatesRejectedOrDroppedInEveryFormat) {
   LabelledCloud cloud = makeCloud(50, true, true);
   cloud.points[7].y = std::numeric_limits<float>::quiet_NaN();
   cloud.points[9].z = std::numeric_limits<float>::infinity();
-  cloud.points[11].normal_x = std::numeric_limits<float>::quiet_NaN();
+  cloud.points[11].normal_x = std::numeric_limits<float>::quiet_NaN();  // a missing normal, kept
   for (const char* ext : {".pcd", ".ply", ".npy"}) {
     const std::string path = dir.file(std::string("nan") + ext);
     paco::io::saveCloud(path, cloud);
-    expectLoadError(path, "3 of 50 points have non-finite");
+    expectLoadError(path, "2 of 50 points have non-finite (NaN/Inf) coordinates");
     expectLoadError(path, "the first is point 7");
     paco::io::CloudReadOptions drop;
     drop.non_finite = paco::io::NonFinitePolicy::Drop;
     const LabelledCloud kept = paco::io::loadCloud(path, drop);
-    ASSERT_EQ(kept.points.size(), 47u) << ext;
-    ASSERT_EQ(kept.labels.size(), 47u);
+    ASSERT_EQ(kept.points.size(), 48u) << ext;
+    ASSERT_EQ(kept.labels.size(), 48u);
     EXPECT_EQ(kept.points[7].x, cloud.points[8].x);  // the points after a dropped one move up
     EXPECT_EQ(kept.labels[7], cloud.labels[8]);
+    EXPECT_EQ(kept.points[9].x, cloud.points[11].x);
   }
   writeBytes(dir.file("nan.xyz"), "1 2 3\nnan 1 2\n4 5 inf\n");
   expectLoadError(dir.file("nan.xyz"), "2 of 3 points have non-finite");

@@ -82,29 +82,21 @@ std::string writePlyCloud(const LabelledCloud& cloud, bool ascii) {
 
 LabelledCloud readXyz(const std::string& path, const std::string& bytes) {
   LabelledCloud cloud;
-  TextCursor text(bytes);
+  TextCursor text(bytes, utf8BomLength(bytes));
   std::string_view line;
   std::vector<std::string_view> tok;
   std::size_t columns = 0;
   for (std::size_t line_number = 1; text.nextLine(line); ++line_number) {
     const std::size_t hash = line.find('#');
     if (hash != std::string_view::npos) line = line.substr(0, hash);
-    splitTokens(line, tok);
-    // Some tools separate with commas: "x,y,z".
-    if (tok.size() == 1 && tok[0].find(',') != std::string_view::npos) {
-      std::string_view rest = tok[0];
-      tok.clear();
-      while (!rest.empty()) {
-        const std::size_t comma = rest.find(',');
-        tok.push_back(rest.substr(0, comma));
-        rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
-      }
-    }
+    if (!splitValues(line, tok))
+      fail(path, "malformed: line " + std::to_string(line_number) +
+                     " has an empty value (two commas in a row, or a comma at the start or end of the line)");
     if (tok.empty()) continue;
     if (columns == 0) {
       if (tok.size() != 3 && tok.size() != 6)
         fail(path, "malformed: line " + std::to_string(line_number) + " has " + std::to_string(tok.size()) +
-                       " values; XYZ lines hold \"x y z\" or \"x y z nx ny nz\"");
+                       " values; XYZ lines hold \"x y z\" or \"x y z nx ny nz\", separated by blanks or commas");
       columns = tok.size();
       cloud.has_normals = columns == 6;
     } else if (tok.size() != columns) {
@@ -168,10 +160,8 @@ LabelledCloud cloudFromNpy(const std::string& path, const NpyArray& a) {
     q.curvature = 0.0f;
   }
   if (a.cols == 7) {
-    // saveCloud writes zero normals for a labelled cloud without normals; read that back as such.
-    cloud.has_normals = std::any_of(cloud.points.begin(), cloud.points.end(), [](const pcl::PointNormal& p) {
-      return p.normal_x != 0.0f || p.normal_y != 0.0f || p.normal_z != 0.0f;
-    });
+    // Zero normals (written for a labelled cloud without normals) read back as has_normals false
+    // in loadCloud, as in every format.
     cloud.labels.resize(a.rows);
     for (std::size_t r = 0; r < a.rows; ++r) cloud.labels[r] = detail::labelFromValue(path, a.at(r, 6), r);
   }
@@ -247,12 +237,11 @@ LabelledCloud cloudFromVertexGroups(VertexGroups vg) {
   return cloud;
 }
 
-/// Rejects (or drops, with one warning) points with NaN/Inf coordinates or normals.
+/// Rejects (or drops, with one warning) points with NaN/Inf coordinates. Normals do not count:
+/// see treatNonFiniteNormalsAsMissing.
 void applyNonFinitePolicy(const std::string& path, LabelledCloud& cloud, NonFinitePolicy policy) {
-  const auto finite = [&](const pcl::PointNormal& p) {
-    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
-           (!cloud.has_normals ||
-            (std::isfinite(p.normal_x) && std::isfinite(p.normal_y) && std::isfinite(p.normal_z)));
+  const auto finite = [](const pcl::PointNormal& p) {
+    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
   };
   std::size_t bad = 0, first_bad = 0;
   for (std::size_t i = 0; i < cloud.points.size(); ++i)
@@ -261,10 +250,9 @@ void applyNonFinitePolicy(const std::string& path, LabelledCloud& cloud, NonFini
   if (policy == NonFinitePolicy::Reject) {
     const auto& p = cloud.points[first_bad];
     fail(path, std::to_string(bad) + " of " + detail::plural(cloud.points.size(), "point") +
-                   " have non-finite (NaN/Inf) coordinates or normals, the first is point " +
-                   std::to_string(first_bad) + " (" + detail::numberText(p.x) + ", " + detail::numberText(p.y) +
-                   ", " + detail::numberText(p.z) +
-                   "); drop them with NonFinitePolicy::Drop (the tools' --drop-non-finite)");
+                   " have non-finite (NaN/Inf) coordinates, the first is point " + std::to_string(first_bad) +
+                   " (" + detail::numberText(p.x) + ", " + detail::numberText(p.y) + ", " +
+                   detail::numberText(p.z) + "); drop them with NonFinitePolicy::Drop (the tools' --drop-non-finite)");
   }
   std::size_t kept = 0;
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
@@ -276,7 +264,21 @@ void applyNonFinitePolicy(const std::string& path, LabelledCloud& cloud, NonFini
   cloud.points.resize(kept);
   if (cloud.hasLabels()) cloud.labels.resize(kept);
   std::cerr << "warning: '" << path << "': dropped " << bad << " of " << (kept + bad)
-            << " points with non-finite (NaN/Inf) coordinates or normals" << std::endl;
+            << " points with non-finite (NaN/Inf) coordinates" << std::endl;
+}
+
+/// A NaN/Inf normal is a normal the writer could not compute (PCL writes NaN there), not a bad
+/// point: it becomes the zero normal that means "estimate this one" downstream. A cloud left
+/// without any non-zero normal reports has_normals false, so that callers estimate them all.
+void treatNonFiniteNormalsAsMissing(LabelledCloud& cloud) {
+  if (!cloud.has_normals) return;
+  bool any_normal = false;
+  for (auto& p : cloud.points) {
+    if (!std::isfinite(p.normal_x) || !std::isfinite(p.normal_y) || !std::isfinite(p.normal_z))
+      p.normal_x = p.normal_y = p.normal_z = 0.0f;
+    any_normal = any_normal || p.normal_x != 0.0f || p.normal_y != 0.0f || p.normal_z != 0.0f;
+  }
+  cloud.has_normals = any_normal;
 }
 
 }  // namespace
@@ -303,6 +305,7 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
     fail(path, "unknown point cloud extension '" + ext + "'; use .pcd, .ply, .xyz, .npy, .vg or .bvg");
   }
   applyNonFinitePolicy(path, cloud, options.non_finite);
+  treatNonFiniteNormalsAsMissing(cloud);
   if (cloud.points.empty()) fail(path, "holds no points");
   cloud.points.width = static_cast<std::uint32_t>(cloud.points.size());
   cloud.points.height = 1;

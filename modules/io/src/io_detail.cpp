@@ -96,6 +96,31 @@ void splitTokens(std::string_view line, std::vector<std::string_view>& tokens) {
   }
 }
 
+bool splitValues(std::string_view line, std::vector<std::string_view>& values) {
+  values.clear();
+  bool after_comma = false;  // a comma since the last value, so a value must follow
+  std::size_t i = 0;
+  while (i < line.size()) {
+    if (line[i] == ',') {
+      if (after_comma || values.empty()) return false;
+      after_comma = true;
+      ++i;
+    } else if (isBlank(line[i])) {
+      ++i;
+    } else {
+      const std::size_t start = i;
+      while (i < line.size() && line[i] != ',' && !isBlank(line[i])) ++i;
+      values.push_back(line.substr(start, i - start));
+      after_comma = false;
+    }
+  }
+  return !after_comma;
+}
+
+std::size_t utf8BomLength(std::string_view text) {
+  return text.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;
+}
+
 bool TextCursor::nextToken(std::string_view& token) {
   while (pos_ < text_.size() && (isBlank(text_[pos_]) || text_[pos_] == '\n')) {
     if (text_[pos_] == '\n') ++line_;

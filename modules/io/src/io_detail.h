@@ -31,6 +31,15 @@ bool parseInt64(std::string_view token, std::int64_t& value);
 /// Splits a line at blanks (space, tab, \r).
 void splitTokens(std::string_view line, std::vector<std::string_view>& tokens);
 
+/// Splits a line of values separated by blanks, by commas, or by commas with blanks around them
+/// ("1 2 3", "1,2,3", "1, 2, 3"). False when a comma leaves a value empty (",,", or a comma at the
+/// start or end of the line), since guessing which value is missing would shift the columns.
+bool splitValues(std::string_view line, std::vector<std::string_view>& values);
+
+/// 3 when `text` starts with a UTF-8 byte-order mark (some Windows editors write one), else 0.
+/// Text readers start after it.
+std::size_t utf8BomLength(std::string_view text);
+
 /// Walks a text buffer token by token or line by line, counting lines for messages.
 class TextCursor {
  public:

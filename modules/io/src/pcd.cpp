@@ -70,7 +70,7 @@ LabelledCloud readPcd(const std::string& path, const std::string& bytes) {
   bool have_points = false, have_width = false;
   std::string data_kind;
   std::vector<std::string_view> tok;
-  TextCursor cursor(bytes);
+  TextCursor cursor(bytes, utf8BomLength(bytes));
   std::string_view line;
   std::size_t data_offset = 0;
   while (data_kind.empty()) {

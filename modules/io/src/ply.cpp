@@ -85,7 +85,9 @@ const PlyElement* PlyFile::element(const std::string& name) const {
 }
 
 PlyFile readPly(const std::string& path, const std::string& bytes) {
-  if (bytes.compare(0, 3, "ply") != 0 || bytes.size() < 4 || (bytes[3] != '\n' && bytes[3] != '\r'))
+  const std::size_t start = utf8BomLength(bytes);
+  if (bytes.size() < start + 4 || bytes.compare(start, 3, "ply") != 0 ||
+      (bytes[start + 3] != '\n' && bytes[start + 3] != '\r'))
     fail(path, "malformed: not a PLY file (it does not start with the line \"ply\")");
   const std::size_t header_end = bytes.find("end_header");
   if (header_end == std::string::npos) fail(path, "malformed: PLY header has no end_header line");
@@ -95,7 +97,7 @@ PlyFile readPly(const std::string& path, const std::string& bytes) {
   PlyFile ply;
   Format format = Format::Ascii;
   bool have_format = false;
-  TextCursor header(std::string_view(bytes).substr(0, header_end));
+  TextCursor header(std::string_view(bytes).substr(0, header_end), start);
   std::string_view line;
   std::vector<std::string_view> tok;
   header.nextLine(line);  // "ply"

@@ -16,9 +16,11 @@ namespace paco::io {
 
 /// A point cloud as read from a file: positions, optional normals, optional per-point labels.
 struct LabelledCloud {
-  pcl::PointCloud<pcl::PointNormal> points;  ///< normals are 0 when has_normals is false
-  bool has_normals = false;
-  std::vector<int> labels;                   ///< one per point (-1 = none), or empty for no labels
+  /// A point's normal is 0 where the file gives none for it (a NaN/Inf normal reads as 0, the
+  /// zero normal that the segmenter estimates); all are 0 when has_normals is false.
+  pcl::PointCloud<pcl::PointNormal> points;
+  bool has_normals = false;  ///< false too when the file's normals are all 0 or NaN/Inf
+  std::vector<int> labels;  ///< one per point (-1 = none), or empty for no labels
   /// One packed 0xRRGGBB colour per point, or empty. Written to PCD only (field "rgb", as PCL's
   /// PointXYZRGB); readers leave it empty.
   std::vector<std::uint32_t> colours;
@@ -26,7 +28,8 @@ struct LabelledCloud {
   bool hasColours() const { return !colours.empty(); }
 };
 
-/// What to do with points whose coordinates are NaN or Inf.
+/// What to do with points whose coordinates are NaN or Inf. (A NaN/Inf normal is not a bad point:
+/// it reads as a missing normal, 0.)
 enum class NonFinitePolicy {
   Reject,  ///< throw IoError naming the file and the first bad point (default)
   Drop,    ///< drop them and print one warning to stderr with the count
@@ -46,9 +49,12 @@ struct CloudWriteOptions {
 /// Reads a cloud, choosing the reader by extension (case-insensitive):
 ///   .pcd  PCL PCD (ascii, binary, binary_compressed); fields x y z [normal_x normal_y normal_z] [label]
 ///   .ply  PLY vertices (ascii or binary); properties x y z [nx ny nz] [label|plane_id|segment_index]
-///   .xyz  text, one point a line: "x y z" or "x y z nx ny nz" ('#' starts a comment)
+///   .xyz  text, one point a line: "x y z" or "x y z nx ny nz", separated by blanks or commas
+///         ('#' starts a comment)
 ///   .npy  the authors' (N,7) float32/float64 array: x y z nx ny nz plane_id (N,3 and N,6 too)
-///   .vg/.bvg  PolyFit vertex groups (points, normals, group labels)
+///   .vg/.bvg  PolyFit vertex groups (points, normals, group labels); NaN/Inf values of any kind
+///         fail there (loadVertexGroups)
+/// A UTF-8 byte-order mark before an .xyz file or a .ply/.pcd header is skipped.
 /// Throws paco::IoError for a missing, empty, truncated or malformed file, naming file and problem.
 LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options = {});
 
