@@ -1,6 +1,7 @@
 #include "app_support.h"
 
 #include <paco/common/error.h>
+#include <paco/common/primitive.h>
 #include <paco/io/cloud_io.h>
 
 #include <fcntl.h>
@@ -14,8 +15,10 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 namespace paco::app {
 
@@ -34,13 +37,38 @@ int runTool(const std::string& tool_name, const std::function<int()>& body) {
   }
 }
 
+namespace {
+bool isUnsigned(const boost::program_options::value_semantic* semantic) {
+  namespace po = boost::program_options;
+  return dynamic_cast<const po::typed_value<unsigned short>*>(semantic) ||
+         dynamic_cast<const po::typed_value<unsigned int>*>(semantic) ||
+         dynamic_cast<const po::typed_value<unsigned long>*>(semantic) ||
+         dynamic_cast<const po::typed_value<unsigned long long>*>(semantic);
+}
+
+// program_options reads "-1" into an unsigned option as its wrap-around (18446744073709551615 for
+// --max-points): a count given with a minus sign is refused instead.
+void rejectNegativeUnsigned(const boost::program_options::parsed_options& parsed,
+                            const boost::program_options::options_description& options) {
+  for (const auto& option : parsed.options) {
+    const auto* description = options.find_nothrow(option.string_key, false);
+    if (!description || !isUnsigned(description->semantic().get())) continue;
+    for (const std::string& text : option.value)
+      if (text.find('-') != std::string::npos)
+        throw UsageError("--" + option.string_key + " must be a whole number >= 0, got '" + text + "'");
+  }
+}
+}  // namespace
+
 boost::program_options::variables_map parseCommandLine(
     int argc, char** argv, const boost::program_options::options_description& options,
     const boost::program_options::positional_options_description& positional) {
   namespace po = boost::program_options;
   po::variables_map vm;
   try {
-    po::store(po::command_line_parser(argc, argv).options(options).positional(positional).run(), vm);
+    const po::parsed_options parsed = po::command_line_parser(argc, argv).options(options).positional(positional).run();
+    rejectNegativeUnsigned(parsed, options);
+    po::store(parsed, vm);
     po::notify(vm);
   } catch (const po::error& e) {
     throw UsageError(e.what());
@@ -60,6 +88,92 @@ double parseNonNegativeOrOff(const std::string& option, const std::string& text)
   if (used != text.size() || !std::isfinite(value) || value < 0.0)
     throw UsageError(option + " must be a number >= 0 or 'off', got '" + text + "'");
   return value;
+}
+
+unsigned maxThreads() {
+  // More threads than cores only add contention and start-up time (1000 threads took 42 s on two
+  // cores, 100000 never finished); 4 per hardware thread leaves room for I/O waits.
+  const unsigned hardware = std::thread::hardware_concurrency();
+  return hardware == 0 ? 256u : 4u * hardware;
+}
+
+void validateThreads(const std::string& option, long long threads, const std::string& zero_meaning) {
+  const long long most = maxThreads();
+  if ((threads == 0 && !zero_meaning.empty()) || (threads >= 1 && threads <= most)) return;
+  throw UsageError(option + " must be " + (zero_meaning.empty() ? "" : "0 (" + zero_meaning + ") or ") + "1 to " +
+                   std::to_string(most) + " (4 per hardware thread), got " + std::to_string(threads));
+}
+
+namespace {
+// Whether two paths name the same file: the same path once links and ".." are resolved, or two
+// names of one existing file (a hard link).
+bool sameFile(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ec_a, ec_b, ec;
+  const fs::path canonical_a = fs::weakly_canonical(fs::absolute(a, ec_a), ec_a);
+  const fs::path canonical_b = fs::weakly_canonical(fs::absolute(b, ec_b), ec_b);
+  if (!ec_a && !ec_b && canonical_a == canonical_b) return true;
+  return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec) && !ec;
+}
+
+std::string temporaryName(const std::string& final_path) {
+  const std::filesystem::path p(final_path);
+  // "mesh.obj" -> "mesh.partial.obj": the extension stays last so writers still pick the format.
+  return (p.parent_path() / (p.stem().string() + ".partial" + p.extension().string())).string();
+}
+}  // namespace
+
+void checkOutputsAreNotInputs(const std::vector<FileArgument>& inputs, const std::vector<FileArgument>& outputs) {
+  for (std::size_t o = 0; o < outputs.size(); ++o) {
+    const FileArgument& output = outputs[o];
+    if (output.path.empty()) continue;
+    for (const FileArgument& input : inputs) {
+      if (input.path.empty()) continue;
+      if (sameFile(output.path, input.path))
+        throw UsageError(output.option + " '" + output.path + "' is the same file as " + input.option + " '" +
+                         input.path + "': writing it would replace that input; give " + output.option +
+                         " another file name");
+      const std::string temporary = temporaryName(output.path);
+      if (sameFile(temporary, input.path))
+        throw UsageError(output.option + " '" + output.path + "' is written to '" + temporary + "' first, which is " +
+                         input.option + " '" + input.path + "'; give " + output.option + " another file name");
+    }
+    for (std::size_t earlier = 0; earlier < o; ++earlier)
+      if (!outputs[earlier].path.empty() && sameFile(output.path, outputs[earlier].path))
+        throw UsageError(output.option + " '" + output.path + "' is the same file as " + outputs[earlier].option +
+                         " '" + outputs[earlier].path + "'; give each output its own file name");
+  }
+}
+
+PlanarSegmentation segmentationFromLabels(const io::LabelledCloud& cloud, const std::string& path) {
+  // Labels may be any integers: number them 0..K-1 in order of appearance.
+  std::map<int, int> segment_of;
+  std::vector<int> label_of_segment;
+  PlanarSegmentation segmentation;
+  segmentation.labels.assign(cloud.labels.size(), -1);
+  for (std::size_t i = 0; i < cloud.labels.size(); ++i) {
+    if (cloud.labels[i] < 0) continue;
+    const auto inserted = segment_of.emplace(cloud.labels[i], static_cast<int>(segment_of.size()));
+    if (inserted.second) label_of_segment.push_back(cloud.labels[i]);
+    segmentation.labels[i] = inserted.first->second;
+  }
+  segmentation.planes.resize(segment_of.size());
+  segmentation.rebuildSegmentsFromLabels();
+  for (std::size_t k = 0; k < segmentation.segments.size(); ++k) {
+    std::vector<Eigen::Vector3d> points;
+    Eigen::Vector3d mean_normal = Eigen::Vector3d::Zero();
+    for (int i : segmentation.segments[k].indices) {
+      const auto& p = cloud.points[static_cast<std::size_t>(i)];
+      points.emplace_back(p.x, p.y, p.z);
+      mean_normal += Eigen::Vector3d(p.normal_x, p.normal_y, p.normal_z);
+    }
+    if (points.size() < 3)
+      throw InvalidInputError("label " + std::to_string(label_of_segment[k]) + " of '" + path + "' has " +
+                              std::to_string(points.size()) + (points.size() == 1 ? " point" : " points") +
+                              "; a plane needs at least 3: relabel them, or label them -1 (no plane)");
+    segmentation.planes[k] = Plane::fit(points, mean_normal);
+  }
+  return segmentation;
 }
 
 std::string noisyScanNote(double set, double used) {
@@ -138,14 +252,6 @@ double FusionFlags::clipMargin() const {
   validate();
   return parseNonNegativeOrOff("--clip-margin", clip_margin);
 }
-
-namespace {
-std::string temporaryName(const std::string& final_path) {
-  const std::filesystem::path p(final_path);
-  // "mesh.obj" -> "mesh.partial.obj": the extension stays last so writers still pick the format.
-  return (p.parent_path() / (p.stem().string() + ".partial" + p.extension().string())).string();
-}
-}  // namespace
 
 void checkOutputPath(const std::string& path, const std::string& option, const std::vector<std::string>& extensions) {
   namespace fs = std::filesystem;

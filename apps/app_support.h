@@ -9,6 +9,14 @@
 #include <string>
 #include <vector>
 
+// Declared only: this header stays free of PCL, which paco_train must include after LibTorch.
+namespace paco {
+struct PlanarSegmentation;
+namespace io {
+struct LabelledCloud;
+}
+}  // namespace paco
+
 namespace paco::app {
 
 /// Runs a tool's body; turns paco::Error and std::exception into "<tool>: error: <message>" on
@@ -21,7 +29,8 @@ struct UsageError : std::runtime_error {
 };
 
 /// Parses the command line with boost::program_options; a malformed command line (unknown
-/// option, missing value, bad number) becomes a UsageError, which runTool reports with exit 2.
+/// option, missing value, bad number, a negative number for an unsigned option) becomes a
+/// UsageError, which runTool reports with exit 2.
 boost::program_options::variables_map parseCommandLine(
     int argc, char** argv, const boost::program_options::options_description& options,
     const boost::program_options::positional_options_description& positional);
@@ -29,6 +38,32 @@ boost::program_options::variables_map parseCommandLine(
 /// The value of a non-negative option that can also be "off" (infinity): "--clip-margin 0.1".
 /// Anything else is a UsageError naming `option`.
 double parseNonNegativeOrOff(const std::string& option, const std::string& text);
+
+/// The most threads a --threads or --jobs option may ask for: 4 per hardware thread (256 when the
+/// count is unknown).
+unsigned maxThreads();
+
+/// Throws a UsageError naming `option` unless `threads` is in [1, maxThreads()], or 0 when
+/// `zero_meaning` is not empty (e.g. "one per core").
+void validateThreads(const std::string& option, long long threads, const std::string& zero_meaning = "");
+
+/// A file a tool reads or writes, and the option or argument that names it ("-o", "INPUT").
+struct FileArgument {
+  std::string option;
+  std::string path;  ///< empty: not given, skipped
+};
+
+/// Throws a UsageError naming both options and paths when an output is the same file as an input
+/// (also through a link, or as the "<stem>.partial<ext>" file PendingOutput writes first) or as
+/// another output. Call it before any slow work: a tool must never replace its own input.
+void checkOutputsAreNotInputs(const std::vector<FileArgument>& inputs, const std::vector<FileArgument>& outputs);
+
+/// The segmentation that the per-point labels of `cloud` describe (paco_assemble and
+/// paco_complete --use-labels): one segment per distinct label, whatever the numbers (negative:
+/// no segment), numbered in order of first appearance, each with the plane fitted to its points
+/// and oriented by their mean normal. Throws InvalidInputError naming `path` and the label when a
+/// label has fewer than 3 points.
+PlanarSegmentation segmentationFromLabels(const io::LabelledCloud& cloud, const std::string& path);
 
 /// A number as --help shows a default: "0.7", not "0.69999999999999996".
 std::string shortNumber(double value);

@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -72,12 +73,29 @@ inline void checkTurns(int turns) {
     throw UsageError("--turns must be 1 to " + std::to_string(kMaxEnsembleTurns) + ", got " + std::to_string(turns));
 }
 
-/// The --known-extent option of the tools that fuse (ObservedFusionOptions::known_extent_points).
-inline void addKnownExtentOption(boost::program_options::options_description& options, std::string& text) {
-  options.add_options()("known-extent", boost::program_options::value(&text),
-                        "X0,Y0,Z0,X1,Y1,Z1 (a box), or a cloud file of points (e.g. a footprint's corners at ground "
-                        "and roof height): where the object is known to reach, in the input's units and frame; the "
-                        "hidden side is closed there instead of at the scan's box (with fusion)");
+/// Comma-separated finite numbers of `option`, exactly `count` of them ("X,Y,Z"); UsageError
+/// otherwise, saying what `option` takes (`form`).
+inline std::vector<double> parseNumbers(const std::string& option, const std::string& form, const std::string& text,
+                                        std::size_t count) {
+  std::vector<std::string> items;
+  boost::algorithm::split(items, text, boost::is_any_of(","));
+  std::vector<double> values;
+  for (const std::string& item : items) {
+    std::size_t used = 0;
+    double value = std::nan("");
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(value))
+      throw UsageError(option + " takes " + form + "; '" + item + "' in '" + text + "' is not a finite number");
+    values.push_back(value);
+  }
+  if (values.size() != count)
+    throw UsageError(option + " takes " + form + " (" + std::to_string(count) + " numbers), got " +
+                     std::to_string(values.size()));
+  return values;
 }
 
 /// The points of --known-extent: the cloud in the file `text` names when it exists, else the
@@ -91,24 +109,11 @@ inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
     if (points.empty()) throw IoError("--known-extent: '" + text + "' has no points");
     return points;
   }
-  std::vector<std::string> items;
-  boost::algorithm::split(items, text, boost::is_any_of(","));
-  std::vector<double> values;
-  for (const std::string& item : items) {
-    std::size_t used = 0;
-    double value = std::nan("");
-    try {
-      value = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !std::isfinite(value))
-      throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers) or an existing cloud file; '" + item +
-                       "' in '" + text + "' is not a finite number");
-    values.push_back(value);
-  }
-  if (values.size() != 6)
-    throw UsageError("--known-extent takes X0,Y0,Z0,X1,Y1,Z1 (six numbers), got " + std::to_string(values.size()));
+  const std::string form = "X0,Y0,Z0,X1,Y1,Z1 (a box) or an existing cloud file";
+  // Without a comma it cannot be a box: most likely a file name with a typo.
+  if (text.find(',') == std::string::npos)
+    throw UsageError("--known-extent takes " + form + "; there is no file '" + text + "'");
+  const std::vector<double> values = parseNumbers("--known-extent", form, text, 6);
   const Eigen::AlignedBox3d box(Eigen::Vector3d(values[0], values[1], values[2]),
                                 Eigen::Vector3d(values[3], values[4], values[5]));
   if ((box.min().array() > box.max().array()).any())
@@ -118,11 +123,71 @@ inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
   return corners;
 }
 
+/// What a user may know about a scan besides its points, for the fusion step: where the object
+/// reaches (ObservedFusionOptions::known_extent_points) and where the scanner was
+/// (scanner_direction / scanner_position / scanner_cell).
+struct ScanKnowledge {
+  std::vector<Eigen::Vector3d> known_extent;
+  Eigen::Vector3d scanner_direction = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Vector3d> scanner_position;
+  double scanner_cell = ObservedFusionOptions().scanner_cell;
+
+  bool empty() const {
+    return known_extent.empty() && scanner_direction.squaredNorm() == 0.0 && !scanner_position;
+  }
+};
+
+/// --known-extent, --seen-from, --seen-from-point and --scanner-cell of the tools that fuse.
+struct ScanKnowledgeFlags {
+  std::string known_extent, seen_from, seen_from_point;
+  double scanner_cell = ObservedFusionOptions().scanner_cell;
+
+  void addTo(boost::program_options::options_description& options) {
+    namespace po = boost::program_options;
+    options.add_options()
+        ("known-extent", po::value(&known_extent),
+         "X0,Y0,Z0,X1,Y1,Z1 (a box), or a cloud file of points (e.g. a footprint's corners at ground and roof "
+         "height): where the object is known to reach, in the input's units and frame; the hidden side is closed "
+         "there instead of at the scan's box (with fusion)")
+        ("seen-from", po::value(&seen_from),
+         "X,Y,Z: the direction towards a distant scanner (e.g. 0,0,1 for airborne LiDAR with Z up); completed "
+         "points it would have seen (off the scan's silhouette, or in front of what it saw) are dropped (with fusion)")
+        ("seen-from-point", po::value(&seen_from_point),
+         "X,Y,Z: the scanner's position (e.g. 0,0,0 for a depth camera's own frame), for the same test along lines "
+         "of sight through it (with fusion)")
+        ("scanner-cell", po::value(&scanner_cell)->default_value(scanner_cell, shortNumber(scanner_cell)),
+         "width of a line of sight for --seen-from and --seen-from-point, a fraction of the scan's diagonal (at least "
+         "twice the scan's point spacing); gaps in the scan up to twice this wide do not count as seen empty");
+  }
+
+  /// Throws UsageError on malformed values, and IoError for a --known-extent file that cannot be read.
+  ScanKnowledge parse() const {
+    ScanKnowledge knowledge;
+    knowledge.known_extent = parseKnownExtent(known_extent);
+    if (!seen_from.empty() && !seen_from_point.empty())
+      throw UsageError("give --seen-from (a direction) or --seen-from-point (a position), not both");
+    if (!seen_from.empty()) {
+      const std::vector<double> d = parseNumbers("--seen-from", "X,Y,Z (a direction)", seen_from, 3);
+      knowledge.scanner_direction = Eigen::Vector3d(d[0], d[1], d[2]);
+      if (knowledge.scanner_direction.norm() == 0.0)
+        throw UsageError("--seen-from takes a direction towards the scanner; 0,0,0 is none");
+    }
+    if (!seen_from_point.empty()) {
+      const std::vector<double> p = parseNumbers("--seen-from-point", "X,Y,Z (a position)", seen_from_point, 3);
+      knowledge.scanner_position = Eigen::Vector3d(p[0], p[1], p[2]);
+    }
+    if (!(scanner_cell > 0.0 && scanner_cell < 1.0))
+      throw UsageError("--scanner-cell must be in (0, 1) (a fraction of the diagonal), got " + shortNumber(scanner_cell));
+    knowledge.scanner_cell = scanner_cell;
+    return knowledge;
+  }
+};
+
 /// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`; the box
-/// fill reaches `known_extent` (parseKnownExtent) when given.
+/// fill reaches the known extent, and the scanner's view bounds the completion, when given.
 inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
                               const PlanarSegmentation& segmentation, const FusionFlags& flags,
-                              const std::vector<Eigen::Vector3d>& known_extent, StageTimer& timer) {
+                              const ScanKnowledge& knowledge, StageTimer& timer) {
   timer.start("fuse");
   ObservedFusionReport report;
   ObservedFusionOptions options;
@@ -132,10 +197,13 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
   options.unseen_point_fraction = flags.unseen_point_fraction;
   options.contradiction_radius = flags.contradiction_radius;
   options.join_distance = flags.join_distance;
-  options.known_extent_points = known_extent;
+  options.known_extent_points = knowledge.known_extent;
+  options.scanner_direction = knowledge.scanner_direction;
+  options.scanner_position = knowledge.scanner_position;
+  options.scanner_cell = knowledge.scanner_cell;
   primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), options, &report);
   timer.stop();
-  std::printf("fuse with the seen faces%s: %s\n", known_extent.empty() ? "" : " (box fill to the known extent)",
+  std::printf("fuse with the seen faces%s: %s\n", knowledge.known_extent.empty() ? "" : " (box fill to the known extent)",
               describe(report).c_str());
 }
 

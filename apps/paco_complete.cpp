@@ -41,7 +41,7 @@ struct Options {
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   int turns = paco::TurnEnsembleOptions().turns;
   bool no_fusion = false;
-  std::string known_extent;
+  paco::app::ScanKnowledgeFlags knowledge;
   paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   int threads = 0;
   int points = 2048;
@@ -86,7 +86,7 @@ int run(int argc, char** argv) {
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
   paco::app::addTurnsOption(visible, o.turns);
-  paco::app::addKnownExtentOption(visible, o.known_extent);
+  o.knowledge.addTo(visible);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -101,18 +101,26 @@ int run(int argc, char** argv) {
   if (o.output.empty()) throw paco::app::UsageError("expected -o PRIMITIVES.vg");
   paco::app::checkOutputPath(o.output, "-o", {".vg", ".bvg"});
   if (!o.pcd.empty()) paco::app::checkOutputPath(o.pcd, "--pcd", {".pcd"});
+  paco::app::checkOutputsAreNotInputs(
+      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.knowledge.known_extent}},
+      {{"-o", o.output}, {"--pcd", o.pcd}});
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
     throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
   paco::app::checkTurns(o.turns);
-  const std::vector<Eigen::Vector3d> known_extent = paco::app::parseKnownExtent(o.known_extent);
-  if (!known_extent.empty() && o.no_fusion)
-    throw paco::app::UsageError("--known-extent works through the box fill of the fusion step: drop --no-fusion");
+  const paco::app::ScanKnowledge knowledge = o.knowledge.parse();
+  if (!knowledge.empty() && o.no_fusion)
+    throw paco::app::UsageError("--known-extent, --seen-from and --seen-from-point work through the fusion step: "
+                                "drop --no-fusion");
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
   paco::app::validateNoiseAdaptation(o.noise_adaptation);
   o.fusion.validate();
-  if (o.threads < 0) throw paco::app::UsageError("--threads must be >= 0");
+  paco::app::validateThreads("--threads", o.threads, "one per hardware thread");
+  if (!(o.epsilon > 0.0 && o.epsilon < 1.0))
+    throw paco::app::UsageError("--epsilon must be in (0, 1) (a fraction of the bounding-box diagonal), got " +
+                                paco::app::shortNumber(o.epsilon));
+  if (o.points < 1) throw paco::app::UsageError("--points must be at least 1, got " + std::to_string(o.points));
 
   // Check everything that can be checked before the slow work: names, model file, input file.
   paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
@@ -135,6 +143,10 @@ int run(int argc, char** argv) {
   timer.stop();
   std::printf("model '%s': preset %s, %.2f M parameters\n", o.model.c_str(),
               model->config().name.c_str(), model->parameterCount() / 1e6);
+  // The encoder groups the points around the model's centres: it needs at least one point each.
+  if (o.points < model->config().num_centres)
+    throw paco::app::UsageError("--points must be at least " + std::to_string(model->config().num_centres) +
+                                " (the model's centres), got " + std::to_string(o.points));
 
   paco::InterruptGuard interrupt_guard;
   timer.start("read");
@@ -154,20 +166,7 @@ int run(int argc, char** argv) {
   if (o.use_labels) {
     if (!scan.hasLabels())
       throw paco::InvalidInputError("'" + o.input + "' has no labels; drop --use-labels to segment it");
-    int max_label = -1;
-    for (int label : scan.labels) max_label = std::max(max_label, label);
-    segmentation.labels = scan.labels;
-    segmentation.planes.resize(static_cast<std::size_t>(max_label + 1));
-    segmentation.rebuildSegmentsFromLabels();
-    for (std::size_t s = 0; s < segmentation.segments.size(); ++s) {
-      std::vector<Eigen::Vector3d> members;
-      for (int i : segmentation.segments[s].indices)
-        members.push_back(cloud->points[static_cast<std::size_t>(i)].getVector3fMap().cast<double>());
-      if (members.size() < 3)
-        throw paco::InvalidInputError("'" + o.input + "': label " + std::to_string(s) +
-                                      " has fewer than 3 points; relabel or drop --use-labels");
-      segmentation.planes[s] = paco::Plane::fit(members);
-    }
+    segmentation = paco::app::segmentationFromLabels(scan, o.input);
   } else {
     paco::setScanDefaults(*segmenter, cloud->size(), o.min_points, o.min_parallel_points, o.noise_adaptation);
     segmenter->setInputCloud(cloud);
@@ -186,7 +185,7 @@ int run(int argc, char** argv) {
 
   std::vector<paco::PlanarPrimitive> primitives =
       paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns, o.points, timer);
-  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, known_extent, timer);
+  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, knowledge, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
                  kTool);

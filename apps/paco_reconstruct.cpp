@@ -43,7 +43,7 @@ struct Options {
   double threshold = paco::ParametricCompleter().getConfidenceThreshold();
   int turns = paco::TurnEnsembleOptions().turns;
   bool no_fusion = false;
-  std::string known_extent;
+  paco::app::ScanKnowledgeFlags knowledge;
   paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
   std::string assembler = "polyfit";
   std::string solver = "cbc";
@@ -100,7 +100,7 @@ int run(int argc, char** argv) {
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
   paco::app::addTurnsOption(visible, o.turns);
-  paco::app::addKnownExtentOption(visible, o.known_extent);
+  o.knowledge.addTo(visible);
   o.fusion.addTo(visible);
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
@@ -115,21 +115,29 @@ int run(int argc, char** argv) {
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
   if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
   paco::app::checkTurns(o.turns);
-  const std::vector<Eigen::Vector3d> known_extent = paco::app::parseKnownExtent(o.known_extent);
-  if (!known_extent.empty() && o.no_fusion)
-    throw paco::app::UsageError("--known-extent works through the box fill of the fusion step: drop --no-fusion");
-  if (!known_extent.empty() && o.no_completion)
-    throw paco::app::UsageError("--known-extent closes the completed scan: drop --no-completion");
+  const paco::app::ScanKnowledge knowledge = o.knowledge.parse();
+  if (!knowledge.empty() && o.no_fusion)
+    throw paco::app::UsageError("--known-extent, --seen-from and --seen-from-point work through the fusion step: "
+                                "drop --no-fusion");
+  if (!knowledge.empty() && o.no_completion)
+    throw paco::app::UsageError("--known-extent, --seen-from and --seen-from-point bound the completed scan: drop "
+                                "--no-completion");
   paco::app::validateMaxPoints(o.max_points);
   paco::app::validateMinPoints(o.min_points);
   paco::app::validateMinParallelPoints(o.min_parallel_points);
   paco::app::validateNoiseAdaptation(o.noise_adaptation);
   o.fusion.validate();
+  paco::app::validateThreads("--threads", o.threads, "all cores");
+  if (!(o.time_limit > 0.0))
+    throw paco::app::UsageError("--time-limit must be more than 0 seconds, got " + paco::app::shortNumber(o.time_limit));
   if (o.vg_output.empty()) o.vg_output = defaultSibling(o.output, ".vg");
   if (o.pcd_output.empty()) o.pcd_output = defaultSibling(o.output, "_primitives.pcd");
   paco::app::checkOutputPath(o.output, "-o", {".obj", ".off", ".ply", ".stl"});
   paco::app::checkOutputPath(o.vg_output, "--vg", {".vg", ".bvg"});
   paco::app::checkOutputPath(o.pcd_output, "--pcd", {".pcd"});
+  paco::app::checkOutputsAreNotInputs(
+      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.knowledge.known_extent}},
+      {{"-o", o.output}, {"--vg", o.vg_output}, {"--pcd", o.pcd_output}});
 
   // Check everything that can be checked before the slow work: names, model file, input file.
   auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>(o.segmenter);
@@ -188,10 +196,14 @@ int run(int argc, char** argv) {
   } else {
     primitives = paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns,
                                          paco::TurnEnsembleOptions().num_points, timer);
-    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, known_extent, timer);
+    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, knowledge, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
+  if (primitives.empty())  // as a rule only with --no-fusion: fusion keeps the seen faces
+    throw paco::InvalidInputError("nothing to assemble: no completed primitive has confidence above --threshold " +
+                                  paco::app::shortNumber(o.threshold) + "; lower --threshold" +
+                                  (o.no_fusion ? ", or drop --no-fusion to keep the seen faces" : ""));
   timer.start("assemble");
   assembler.setInputPrimitives(primitives);
   paco::SurfaceMesh mesh;

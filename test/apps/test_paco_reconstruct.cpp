@@ -170,7 +170,11 @@ TEST(PacoReconstruct, FusionKeepsTheSeenFacesWhenTheNetworkKeepsNothing) {
   const fs::path out_dir = dir.file("nofusion");
   fs::create_directories(out_dir);
   EXPECT_NE(paco::test::runCommand(base + quoted((out_dir / "part.obj").string()) + " --no-fusion", &log), 0);
-  EXPECT_NE(log.find("assembly"), std::string::npos) << log;
+  EXPECT_NE(log.find("nothing to assemble: no completed primitive has confidence above --threshold 1; lower "
+                     "--threshold, or drop --no-fusion"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("setInputPrimitives"), std::string::npos) << log;
   EXPECT_EQ(filesIn(out_dir), 0u);
 }
 
@@ -263,16 +267,38 @@ TEST(PacoReconstruct, AKnownExtentMustBeABoxOrACloud) {
   // without the fusion that uses it.
   const std::string bad = tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("bad.obj")) + " --known-extent ";
   EXPECT_EQ(paco::test::runCommand(bad + "1,2,3", &log), 2) << log;
-  EXPECT_NE(log.find("six numbers), got 3"), std::string::npos) << log;
+  EXPECT_NE(log.find("(6 numbers), got 3"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,x", &log), 2) << log;
   EXPECT_NE(log.find("'x' in '0,0,0,1,1,x' is not a finite number"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + quoted(dir.file("no_such_footprint.xyz")), &log), 2) << log;
-  EXPECT_NE(log.find("or an existing cloud file"), std::string::npos) << log;
+  EXPECT_NE(log.find("or an existing cloud file; there is no file"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "2,0,0,1,1,1", &log), 2) << log;
   EXPECT_NE(log.find("must not exceed"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,1 --no-fusion", &log), 2) << log;
   EXPECT_NE(log.find("drop --no-fusion"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,1 --no-completion", &log), 2) << log;
+  EXPECT_FALSE(fs::exists(dir.file("bad.obj")));
+}
+
+// The scanner's direction or position: malformed values, both at once, a zero direction, a cell
+// out of range and either without fusion are usage errors that leave no output.
+TEST(PacoReconstruct, ScannerOptionsAreChecked) {
+  TempDir dir;
+  std::string log;
+  const std::string base = tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("bad.obj"));
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {" --seen-from 0,0", "--seen-from takes X,Y,Z (a direction) (3 numbers), got 2"},
+      {" --seen-from 0,0,z", "'z' in '0,0,z' is not a finite number"},
+      {" --seen-from 0,0,0", "0,0,0 is none"},
+      {" --seen-from-point 1,2", "--seen-from-point takes X,Y,Z"},
+      {" --seen-from 0,0,1 --seen-from-point 0,0,5", "not both"},
+      {" --seen-from 0,0,1 --scanner-cell 0", "--scanner-cell must be in (0, 1)"},
+      {" --seen-from 0,0,1 --no-fusion", "drop --no-fusion"},
+      {" --seen-from-point 0,0,5 --no-completion", "drop --no-completion"}};
+  for (const auto& [options, message] : cases) {
+    EXPECT_EQ(paco::test::runCommand(base + options, &log), 2) << options << "\n" << log;
+    EXPECT_NE(log.find(message), std::string::npos) << options << "\n" << log;
+  }
   EXPECT_FALSE(fs::exists(dir.file("bad.obj")));
 }
 

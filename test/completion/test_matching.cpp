@@ -118,3 +118,50 @@ TEST(Matching, EmptyAndNonFinite) {
   bad(1, 0) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(solveAssignment(bad), paco::InvalidInputError);
 }
+
+// The nearest-neighbour kernels behind fusion (internal to paco_completion).
+#include "../../modules/completion/src/nearest_neighbours.h"
+
+namespace {
+
+float squaredDistance(const std::vector<float>& rows, std::int64_t a, std::int64_t b) {
+  float sum = 0.0f;
+  for (int c = 0; c < 3; ++c) sum += (rows[3 * a + c] - rows[3 * b + c]) * (rows[3 * a + c] - rows[3 * b + c]);
+  return sum;
+}
+
+TEST(NearestNeighbours, TheNearestOtherPointIsExactWithTheKdTreeToo) {
+  // 2,000 points: 4e6 pairs, above kBruteForcePairs, so the kd-tree answers; 40 points brute force.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+  for (std::int64_t count : {40, 2000}) {
+    std::vector<float> rows(3 * static_cast<std::size_t>(count));
+    for (float& v : rows) v = uniform(random);
+    rows[3] = rows[0], rows[4] = rows[1], rows[5] = rows[2];  // a duplicate: each is the other's nearest
+    std::vector<std::int64_t> nearest(static_cast<std::size_t>(count));
+    paco::completion::detail::nearestOtherPoint(rows.data(), count, nearest.data());
+    EXPECT_EQ(nearest[0], 1);
+    EXPECT_EQ(nearest[1], 0);
+    for (std::int64_t i = 0; i < count; ++i) {
+      ASSERT_NE(nearest[i], i);
+      float best = std::numeric_limits<float>::infinity();
+      for (std::int64_t j = 0; j < count; ++j)
+        if (j != i) best = std::min(best, squaredDistance(rows, i, j));
+      EXPECT_EQ(squaredDistance(rows, i, nearest[i]), best) << "point " << i << " of " << count;
+    }
+  }
+}
+
+TEST(NearestNeighbours, CoordinatesWhoseSquaresOverflowStillGiveAValidIndex) {
+  // Squared distances near 1e40 overflow a float: FLANN then finds nothing.
+  std::vector<float> data = {1e20f, 0, 0, -1e20f, 0, 0, 0, 1e20f, 0};
+  std::vector<float> queries(3 * 600, 3e20f);
+  std::vector<std::int64_t> nearest(600, -7);
+  paco::completion::detail::nearestIn(data.data(), 3, queries.data(), 600, nearest.data());
+  for (std::int64_t n : nearest) {
+    EXPECT_GE(n, 0);
+    EXPECT_LT(n, 3);
+  }
+}
+
+}  // namespace

@@ -558,5 +558,98 @@ TEST(ObservedFusion, ASeenFacesPredictedPointsInsideTheSeenSolidAreDropped) {
   EXPECT_EQ(countPoints(fused[0], over_the_step), 25u + countPoints(completed[0], over_the_step));
 }
 
+// Seen from above: a roof z = 1 (10 x 10 points, x and y in 0.05..0.95, spacing 0.1). Predicted:
+// the roof, too wide; a wall under its edge; a wall far off; a face floating above the roof; and
+// the bottom, a little too wide.
+struct RoofScan {
+  std::vector<PlanarPrimitive> observed = {
+      patch(Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1}), {0.5, 0.5, 1}, 1.0, 10, 1.0f)};
+  std::vector<PlanarPrimitive> completed = {
+      // x and y at -0.4, -0.2, ..., 1.4: those at 0 .. 1.0 lie within a line of sight of the roof
+      patch(Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1}), {0.5, 0.5, 1}, 2.0, 10, 0.9f),
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 6, 0.9f),
+      patch(Plane::fromPointAndNormal({2, 0, 0}, {1, 0, 0}), {2, 0.5, 0.5}, 1.0, 6, 0.9f),
+      patch(Plane::fromPointAndNormal({0, 0, 1.5}, {0, 0, 1}), {0.5, 0.5, 1.5}, 0.5, 5, 0.9f),
+      // x and y at -0.2, 0, ..., 1.2
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.6, 8, 0.9f)};
+};
+
+TEST(ObservedFusion, CompletedPointsADistantScannerWouldHaveSeenAreDropped) {
+  const RoofScan scan;
+  ObservedFusionReport report;
+  EXPECT_EQ(fuseWithObserved(scan.completed, scan.observed, fusionOnly(), &report).size(), 5u);  // off by default
+  EXPECT_EQ(report.seen_empty_points, 0u);
+
+  // Airborne: the scanner looked down from +z. A line of sight is twice the roof's point spacing
+  // wide (0.2), wider than the cell of 0.03 of the diagonal (0.038).
+  ObservedFusionOptions options = fusionOnly();
+  options.scanner_direction = {0, 0, 2};
+  const auto fused = fuseWithObserved(scan.completed, scan.observed, options, &report);
+  ASSERT_EQ(fused.size(), 3u);  // the far wall and the floating face are gone
+  // The roof keeps its seen points and the 6 x 6 predicted ones over it; the bottom loses its
+  // outer ring (28 of 64, less than half) and stays.
+  EXPECT_EQ(fused[0].points.size(), 100u + 36u);
+  EXPECT_NEAR(fused[1].plane.signedDistance({0, 0.5, 0.5}), 0.0, 1e-12);
+  EXPECT_EQ(fused[1].points.size(), 36u);
+  EXPECT_NEAR(fused[2].plane.signedDistance({0.5, 0.5, 0}), 0.0, 1e-12);
+  EXPECT_EQ(fused[2].points.size(), 36u);
+  EXPECT_EQ(report.seen_empty_points, 64u + 36u + 25u + 28u);
+  EXPECT_EQ(report.seen_empty, 2u);
+  EXPECT_NE(describe(report).find("153 completed points dropped where the scanner would have seen them (2 unseen"),
+            std::string::npos)
+      << describe(report);
+
+  // Seen from below, the roof hides nothing beneath it: everything under it would have been seen.
+  options.scanner_direction = {0, 0, -1};
+  const auto from_below = fuseWithObserved(scan.completed, scan.observed, options, &report);
+  ASSERT_EQ(from_below.size(), 2u);  // the roof and the face above it, which the roof hides
+  EXPECT_EQ(from_below[0].points.size(), 100u + 36u);
+  EXPECT_NEAR(from_below[1].plane.signedDistance({0.5, 0.5, 1.5}), 0.0, 1e-12);
+}
+
+TEST(ObservedFusion, CompletedPointsAScannerAtAPointWouldHaveSeenAreDropped) {
+  const RoofScan scan;
+  ObservedFusionOptions options = fusionOnly();
+  options.scanner_position = Eigen::Vector3d(0.5, 0.5, 3.0);
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(scan.completed, scan.observed, options, &report);
+  ASSERT_EQ(fused.size(), 3u);
+  EXPECT_EQ(fused[0].points.size(), 100u + 36u);
+  EXPECT_EQ(fused[1].points.size(), 36u);
+  // Lines of sight through a point spread: the roof's shadow covers the whole bottom.
+  EXPECT_EQ(fused[2].points.size(), 64u);
+  EXPECT_EQ(report.seen_empty_points, 64u + 36u + 25u);
+  EXPECT_EQ(report.seen_empty, 2u);
+
+  // What cannot be a scanner is rejected.
+  options.scanner_position = Eigen::Vector3d(0.5, 0.5, 1.0);  // at the seen points' centre
+  EXPECT_THROW(fuseWithObserved(scan.completed, scan.observed, options), InvalidInputError);
+  options.scanner_position = Eigen::Vector3d(0.5, 0.5, 3.0);
+  options.scanner_direction = {0, 0, 1};  // both ways
+  EXPECT_THROW(fuseWithObserved(scan.completed, scan.observed, options), InvalidInputError);
+  options.scanner_position.reset();
+  options.scanner_direction = {0, 0, std::nan("")};
+  EXPECT_THROW(fuseWithObserved(scan.completed, scan.observed, options), InvalidInputError);
+  options.scanner_direction = {0, 0, 1};
+  for (double bad : {0.0, -0.1, std::nan("")}) {
+    options.scanner_cell = bad;
+    EXPECT_THROW(fuseWithObserved(scan.completed, scan.observed, options), InvalidInputError);
+  }
+}
+
+TEST(ObservedFusion, CoordinatesNear1e20DoNotCrashIt) {
+  // Squared distances overflow a float there, and the nearest-point searches found no neighbour
+  // (a segfault before). What comes out is not checked: such a cloud has no sensible answer.
+  RoofScan scan;
+  for (auto* primitives : {&scan.observed, &scan.completed})
+    for (auto& primitive : *primitives) {
+      for (auto& p : primitive.points) p.x *= 1e20f, p.y *= 1e20f, p.z *= 1e20f;
+      primitive.plane.offset *= 1e20;
+    }
+  ObservedFusionOptions options;
+  options.scanner_direction = {0, 0, 1};
+  EXPECT_FALSE(fuseWithObserved(scan.completed, scan.observed, options).empty());
+}
+
 }  // namespace
 }  // namespace paco

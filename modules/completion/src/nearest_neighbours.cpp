@@ -53,6 +53,34 @@ void kdTreeNearest(const float* data, std::int64_t n_data, const float* queries,
   flann::Matrix<float> distance_matrix(distances.data(), distances.size(), 1);
   index.knnSearch(query_matrix, found_matrix, distance_matrix, 1, flann::SearchParams(-1));
   std::copy(found.begin(), found.end(), nearest);
+  // FLANN finds nothing when every squared distance overflows a float (coordinates near 1e20), and
+  // then returns an arbitrary index: the brute force below still returns a valid one.
+  const Columns columns(data, n_data);
+  std::vector<float> all;
+  for (std::int64_t i = 0; i < n_queries; ++i) {
+    if (nearest[i] >= 0 && nearest[i] < n_data && distances[static_cast<std::size_t>(i)] < kInfinity) continue;
+    all.resize(static_cast<std::size_t>(n_data));
+    distancesTo(columns, n_data, queries[3 * i], queries[3 * i + 1], queries[3 * i + 2], all.data());
+    nearest[i] = argmin(all.data(), n_data);
+  }
+}
+
+void kdTreeNearestOther(const float* points, std::int64_t count, std::int64_t* nearest) {
+  flann::Matrix<float> matrix(const_cast<float*>(points), static_cast<std::size_t>(count), 3);
+  flann::Index<flann::L2_Simple<float>> index(matrix, flann::KDTreeSingleIndexParams(15));
+  index.buildIndex();
+  std::vector<int> found(2 * static_cast<std::size_t>(count), -1);
+  std::vector<float> distances(found.size());
+  flann::Matrix<int> found_matrix(found.data(), static_cast<std::size_t>(count), 2);
+  flann::Matrix<float> distance_matrix(distances.data(), static_cast<std::size_t>(count), 2);
+  index.knnSearch(matrix, found_matrix, distance_matrix, 2, flann::SearchParams(-1));
+  for (std::int64_t i = 0; i < count; ++i) {
+    // The point itself is one of the two (first, unless a duplicate ties with it).
+    const int first = found[2 * static_cast<std::size_t>(i)], second = found[2 * static_cast<std::size_t>(i) + 1];
+    const int other = first == i ? second : first;
+    const float distance = distances[2 * static_cast<std::size_t>(i) + (first == i ? 1 : 0)];
+    nearest[i] = other >= 0 && other < count && other != i && distance < kInfinity ? other : (i == 0 ? 1 : 0);
+  }
 }
 
 }  // namespace
@@ -82,6 +110,14 @@ void mutualNearest(const float* a, std::int64_t na, const float* b, std::int64_t
         nearest_in_a[j] = i;
       }
   }
+}
+
+void nearestOtherPoint(const float* points, std::int64_t count, std::int64_t* nearest) {
+  if (count * count > kBruteForcePairs) {
+    kdTreeNearestOther(points, count, nearest);
+    return;
+  }
+  kNearestWithinSet(points, count, 1, nearest);
 }
 
 void kNearestWithinSet(const float* points, std::int64_t count, int k, std::int64_t* neighbours) {

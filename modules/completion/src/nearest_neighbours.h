@@ -23,7 +23,12 @@ void nearestIn(const float* data, std::int64_t n_data, const float* queries, std
 /// Above this many pairs mutualNearest() uses kd-trees.
 constexpr std::int64_t kBruteForcePairs = std::int64_t{1} << 21;
 
-/// Indices (p·k + i) of the k nearest other points of each of the `count` points (count > k > 0).
+/// The index of the nearest other point of each of the `count` points (count >= 2); brute force
+/// below `kBruteForcePairs` pairs, a FLANN kd-tree above.
+void nearestOtherPoint(const float* points, std::int64_t count, std::int64_t* nearest);
+
+/// Indices (p·k + i) of the k nearest other points of each of the `count` points (count > k > 0;
+/// brute force, for small sets).
 void kNearestWithinSet(const float* points, std::int64_t count, int k, std::int64_t* neighbours);
 
 /// Chamfer part of the matching cost. For every predicted plane j (its `per_plane` points start at

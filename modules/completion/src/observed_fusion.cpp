@@ -297,6 +297,124 @@ class SeenFreeSpace {
   SightLines lines_;
 };
 
+// What a scanner at a known place saw (ObservedFusionOptions::scanner_direction/position): the
+// seen points binned across its lines of sight. A surface nearer to the scanner than every seen
+// point within a cell of its line of sight, or on a line of sight that passes none, would have
+// been seen.
+class ScannerView {
+ public:
+  ScannerView(const std::vector<PlanarPrimitive>& observed, const ObservedFusionOptions& options, double diagonal)
+      : tolerance_(options.scanner_cell * diagonal) {
+    std::vector<Eigen::Vector3d> seen;
+    std::vector<float> rows;
+    for (const auto& segment : observed)
+      for (const auto& p : segment.points) {
+        seen.push_back(position(p));
+        rows.insert(rows.end(), {p.x, p.y, p.z});
+      }
+    if (seen.size() >= 2) {
+      // On a sparse scan a line of sight between two seen points must still count as seen.
+      std::vector<std::int64_t> nearest(seen.size());
+      completion::detail::nearestOtherPoint(rows.data(), static_cast<std::int64_t>(seen.size()), nearest.data());
+      std::vector<double> spacing(seen.size());
+      for (std::size_t i = 0; i < seen.size(); ++i) spacing[i] = (seen[i] - seen[static_cast<std::size_t>(nearest[i])]).norm();
+      std::nth_element(spacing.begin(), spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2), spacing.end());
+      tolerance_ = std::max(tolerance_, kSpacings * spacing[spacing.size() / 2]);
+    }
+    if (seen.empty() || !(tolerance_ > 0.0)) return;
+    origin_ = seen.front();
+    if (options.scanner_position) {
+      eye_ = *options.scanner_position;
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (const auto& x : seen) centroid += x;
+      centroid /= static_cast<double>(seen.size());
+      if (!((centroid - *eye_).norm() > tolerance_))
+        throw InvalidInputError("fuseWithObserved: the scanner position is at the centre of the seen points; give "
+                                "where the scanner stood, outside the object");
+      along_ = (centroid - *eye_).normalized();
+    } else {
+      along_ = -options.scanner_direction.normalized();  // from the scanner towards the object
+    }
+    across_ = along_.unitOrthogonal();
+    up_ = along_.cross(across_);
+    bin_ = tolerance_;
+    if (eye_) {
+      // Bins of directions, as wide as a cell at the seen points' median depth.
+      std::vector<double> depths;
+      for (const auto& x : seen) depths.push_back((x - *eye_).dot(along_));
+      std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+      median_depth_ = depths[depths.size() / 2];
+      if (!(median_depth_ > 0.0))
+        throw InvalidInputError("fuseWithObserved: most seen points lie behind the scanner position; give where "
+                                "the scanner stood");
+      bin_ = tolerance_ / median_depth_;
+    }
+    for (const auto& x : seen) {
+      const Sight s = sight(x);
+      if (s.valid) bins_[key(s.ia, s.ib)].push_back(s);
+    }
+  }
+
+  bool wouldHaveSeen(const Eigen::Vector3d& q) const {
+    if (bins_.empty()) return false;
+    const Sight s = sight(q);
+    if (!s.valid) return false;
+    // The nearest seen point to the scanner among those within a cell of the line of sight.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (long long da = -1; da <= 1; ++da)
+      for (long long db = -1; db <= 1; ++db) {
+        const auto found = bins_.find(key(s.ia + da, s.ib + db));
+        if (found == bins_.end()) continue;
+        for (const Sight& p : found->second)
+          if ((p.a - s.a) * (p.a - s.a) + (p.b - s.b) * (p.b - s.b) <= bin_ * bin_)
+            nearest = std::min(nearest, p.distance);
+      }
+    return s.distance < nearest - tolerance_;  // no seen point near the line: infinity
+  }
+
+ private:
+  struct Sight {
+    double a = 0.0, b = 0.0;   // across the line of sight
+    long long ia = 0, ib = 0;  // their bin
+    double distance = 0.0;     // from the scanner along it
+    bool valid = false;
+  };
+
+  Sight sight(const Eigen::Vector3d& q) const {
+    Sight s;
+    if (eye_) {
+      const Eigen::Vector3d r = q - *eye_;
+      const double depth = r.dot(along_);
+      // Near the scanner's own plane (or behind it) the direction says nothing: keep.
+      if (!(depth > 0.01 * median_depth_)) return s;
+      s.a = r.dot(across_) / depth;
+      s.b = r.dot(up_) / depth;
+      s.distance = r.norm();
+    } else {
+      const Eigen::Vector3d r = q - origin_;
+      s.a = r.dot(across_);
+      s.b = r.dot(up_);
+      s.distance = r.dot(along_);
+    }
+    s.ia = static_cast<long long>(std::floor(s.a / bin_));
+    s.ib = static_cast<long long>(std::floor(s.b / bin_));
+    s.valid = std::abs(s.ia) < kMaxBin && std::abs(s.ib) < kMaxBin;
+    return s;
+  }
+  static long long key(long long ia, long long ib) { return ia * (2 * kMaxBin + 1) + ib; }
+  // Bins are counted from a seen point, so that real points are well inside; farther is kept.
+  static constexpr long long kMaxBin = 1LL << 30;
+  // A line of sight is at least this many of the seen points' median spacings wide.
+  static constexpr double kSpacings = 2.0;
+
+  double tolerance_;
+  double bin_ = 1.0, median_depth_ = 1.0;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero(), along_ = Eigen::Vector3d::UnitZ(),
+                  across_ = Eigen::Vector3d::UnitX(), up_ = Eigen::Vector3d::UnitY();
+  std::optional<Eigen::Vector3d> eye_;
+  std::unordered_map<long long, std::vector<Sight>> bins_;
+};
+
 // Adds grid points on the faces of the seen box where no fused point is near and the scan does
 // not show the space empty (SeenFreeSpace; see ObservedFusionOptions::fill_spacing).
 void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observed,
@@ -458,7 +576,11 @@ std::string describe(const ObservedFusionReport& report) {
               : "") +
          (report.contradicted_points ? ", " + std::to_string(report.contradicted_points) +
                                            " points of seen faces dropped where the scan contradicts them"
-                                     : "");
+                                     : "") +
+         (report.seen_empty_points ? ", " + std::to_string(report.seen_empty_points) +
+                                         " completed points dropped where the scanner would have seen them (" +
+                                         std::to_string(report.seen_empty) + " unseen primitives with them)"
+                                   : "");
 }
 
 std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> completed,
@@ -481,6 +603,13 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     throw InvalidInputError("fuseWithObserved: fill_spacing must be 0 (off) or at least " +
                             std::to_string(kMinFillSpacing) + " of the diagonal, got " +
                             std::to_string(options.fill_spacing));
+  if (!options.scanner_direction.allFinite() || (options.scanner_position && !options.scanner_position->allFinite()))
+    throw InvalidInputError("fuseWithObserved: the scanner direction and position must be finite");
+  if (options.scanner_position && options.scanner_direction.squaredNorm() > 0.0)
+    throw InvalidInputError("fuseWithObserved: give the scanner's direction or its position, not both");
+  if (!(options.scanner_cell > 0.0 && std::isfinite(options.scanner_cell)))
+    throw InvalidInputError("fuseWithObserved: scanner_cell must be a positive fraction of the diagonal, got " +
+                            std::to_string(options.scanner_cell));
   for (std::size_t i = 0; i < options.known_extent_points.size(); ++i)
     if (!options.known_extent_points[i].allFinite())
       throw InvalidInputError("fuseWithObserved: known extent point " + std::to_string(i) + " is not finite");
@@ -594,6 +723,22 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       if (!snapped[c] && 2 * gone > before) {
         clipped[c] = true;
         ++counts.clipped;
+      }
+    }
+  }
+  if ((options.scanner_position || options.scanner_direction.squaredNorm() > 0.0) && !observed.empty()) {
+    const ScannerView scanner(observed, options, diagonalOf(observed));
+    // Seen points stay by construction (each is in its own bin, and no nearer than itself).
+    for (std::size_t c = 0; c < completed.size(); ++c) {
+      if (absorbed[c] || clipped[c]) continue;
+      auto& points = completed[c].points;
+      const std::size_t before = points.size();
+      const std::size_t gone =
+          keepWhere(points, [&](std::size_t i) { return !scanner.wouldHaveSeen(position(points[i])); });
+      counts.seen_empty_points += gone;
+      if (!snapped[c] && 2 * gone > before) {
+        clipped[c] = true;
+        ++counts.seen_empty;
       }
     }
   }
