@@ -12,10 +12,11 @@
 
 #include <boost/program_options.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace po = boost::program_options;
@@ -47,31 +48,29 @@ std::vector<paco::PlanarPrimitive> loadPrimitives(const std::string& path) {
   if (!cloud.hasLabels())
     throw paco::InvalidInputError("'" + path + "' has no per-point plane labels: segment it first with "
                                   "paco_segment, or give a .vg/.bvg file");
-  // Labels may be any integers: number them 0..K-1 in order of appearance.
-  std::map<int, int> segment_of;
-  paco::PlanarSegmentation segmentation;
-  segmentation.labels.resize(cloud.labels.size(), -1);
-  for (std::size_t i = 0; i < cloud.labels.size(); ++i) {
-    if (cloud.labels[i] < 0) continue;
-    const auto inserted = segment_of.emplace(cloud.labels[i], static_cast<int>(segment_of.size()));
-    segmentation.labels[i] = inserted.first->second;
-  }
-  segmentation.planes.resize(segment_of.size());
-  segmentation.rebuildSegmentsFromLabels();
-  for (std::size_t k = 0; k < segmentation.segments.size(); ++k) {
-    std::vector<Eigen::Vector3d> points;
-    Eigen::Vector3d mean_normal = Eigen::Vector3d::Zero();
-    for (int i : segmentation.segments[k].indices) {
-      const auto& p = cloud.points[static_cast<std::size_t>(i)];
-      points.emplace_back(p.x, p.y, p.z);
-      mean_normal += Eigen::Vector3d(p.normal_x, p.normal_y, p.normal_z);
-    }
-    if (points.size() < 3)
-      throw paco::InvalidInputError("segment " + std::to_string(k) + " of '" + path + "' has " +
-                                    std::to_string(points.size()) + " points; a plane needs at least 3");
-    segmentation.planes[k] = paco::Plane::fit(points, mean_normal);
-  }
-  return paco::makePrimitives(cloud.points, segmentation);
+  return paco::makePrimitives(cloud.points, paco::app::segmentationFromLabels(cloud, path));
+}
+
+// The assembler's ranges, checked here to name the options and their units.
+void validateAssemblyOptions(double time_limit, double fitting, double coverage, double complexity,
+                             double smoothness, std::size_t min_support, double merge_angle_degrees,
+                             double merge_distance) {
+  using paco::app::shortNumber;
+  using paco::app::UsageError;
+  if (!(time_limit > 0.0)) throw UsageError("--time-limit must be more than 0 seconds, got " + shortNumber(time_limit));
+  for (const auto& [option, weight] : {std::pair<const char*, double>{"--fitting", fitting},
+                                       {"--coverage", coverage},
+                                       {"--complexity", complexity}})
+    if (!(weight >= 0.0 && std::isfinite(weight)))
+      throw UsageError(std::string(option) + " must be a finite number >= 0, got " + shortNumber(weight));
+  if (!(smoothness > 0.0 && std::isfinite(smoothness)))
+    throw UsageError("--smoothness must be a finite number > 0, got " + shortNumber(smoothness));
+  if (min_support < 3) throw UsageError("--min-support must be at least 3 (points of a plane), got " + std::to_string(min_support));
+  if (!(merge_angle_degrees >= 0.0 && merge_angle_degrees < 90.0))
+    throw UsageError("--merge-angle must be in [0, 90) degrees, got " + shortNumber(merge_angle_degrees));
+  if (!(merge_distance >= 0.0 && merge_distance < 1.0))
+    throw UsageError("--merge-distance must be in [0, 1) (a fraction of the diagonal), got " +
+                     shortNumber(merge_distance));
 }
 
 int run(int argc, char** argv) {
@@ -124,6 +123,9 @@ int run(int argc, char** argv) {
   if (input.empty()) throw paco::app::UsageError("missing input file (PRIMITIVES)");
   if (output.empty()) throw paco::app::UsageError("missing output mesh (-o MESH)");
   paco::app::checkOutputPath(output, "-o", {".obj", ".off", ".ply"});
+  paco::app::checkOutputsAreNotInputs({{"PRIMITIVES", input}}, {{"-o", output}});
+  validateAssemblyOptions(time_limit, fitting, coverage, complexity, smoothness, min_support, merge_angle,
+                          merge_distance);
 
   paco::PolygonalAssembler assembler;
   try {
@@ -147,8 +149,12 @@ int run(int argc, char** argv) {
   paco::InterruptGuard interrupt_guard;
   paco::app::StageTimer timer;
   timer.start("load");
-  assembler.setInputPrimitives(loadPrimitives(input));
+  std::vector<paco::PlanarPrimitive> primitives = loadPrimitives(input);
   timer.stop();
+  if (primitives.empty())
+    throw paco::InvalidInputError("'" + input + "' holds no primitives (no vertex group or labelled point); a closed "
+                                  "mesh needs at least 4 planes");
+  assembler.setInputPrimitives(std::move(primitives));
   std::printf("loaded %zu primitives from %s\n", assembler.getInputPrimitives().size(), input.c_str());
 
   timer.start("assemble");

@@ -119,7 +119,9 @@ int run(int argc, char** argv) {
     return 0;
   }
   if (o.input.empty() || o.output.empty()) throw paco::app::UsageError("expected INPUT and OUTPUT files");
-  paco::app::checkOutputPath(o.output, "OUTPUT", {});
+  // The extensions the cloud writer (.pcd .ply .xyz .npy .vg .bvg) and the mesh writer (.obj .off .ply .stl) know.
+  paco::app::checkOutputPath(o.output, "OUTPUT", {".pcd", ".ply", ".xyz", ".npy", ".vg", ".bvg", ".obj", ".off", ".stl"});
+  paco::app::checkOutputsAreNotInputs({{"INPUT", o.input}}, {{"OUTPUT", o.output}});
 
   const std::string in_ext = paco::io::extensionOf(o.input), out_ext = paco::io::extensionOf(o.output);
   bool mesh = isMeshOnly(in_ext) || isMeshOnly(out_ext);

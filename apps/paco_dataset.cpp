@@ -153,6 +153,10 @@ std::vector<Job> collectJobs(const Options& o, const std::string& mesh_dir, std:
 int exportSample(const Options& o) {
   if (o.positional.size() != 2) throw paco::app::UsageError("--export expects DATASET_DIR and OUT.pcd");
   if (o.level < 0 || o.level > 2) throw paco::app::UsageError("--level must be 0, 1 or 2");
+  paco::app::checkOutputPath(o.positional[1], "OUT.pcd", {".pcd", ".ply", ".xyz", ".npy", ".vg", ".bvg"});
+  if (!o.export_mesh.empty())
+    paco::app::checkOutputPath(o.export_mesh, "--export-mesh", {".obj", ".off", ".ply", ".stl"});
+  paco::app::checkOutputsAreNotInputs({}, {{"OUT.pcd", o.positional[1]}, {"--export-mesh", o.export_mesh}});
   const paco::data::Dataset dataset(o.positional[0]);
   const std::string part = o.part.empty() && !dataset.parts().empty() ? dataset.parts().front().part : o.part;
   for (paco::data::Split split : {paco::data::Split::Train, paco::data::Split::Val, paco::data::Split::Test}) {
@@ -267,7 +271,7 @@ int run(int argc, char** argv) {
   }
   if (o.views < 1 || o.views > 255) throw paco::app::UsageError("--views must be in 1..255");
   if (o.stride < 1) throw paco::app::UsageError("--stride must be at least 1");
-  if (o.jobs < 1) throw paco::app::UsageError("--jobs must be >= 1");
+  paco::app::validateThreads("--jobs", o.jobs);
   if (!(o.noise >= 0.0)) throw paco::app::UsageError("--noise must be >= 0");
   if (o.input_points < 1 || o.gt_points < 1 || o.dense_points < o.input_points)
     throw paco::app::UsageError("point counts must be >= 1, and --dense-points >= --input-points");

@@ -190,7 +190,10 @@ int dataset(const Options& o) {
   b.levels = intList(o.levels, "levels");
   b.views = intList(o.views, "views");
   b.limit = o.limit;
-  if (o.jobs < 1) throw paco::app::UsageError("--jobs must be at least 1");
+  paco::app::validateThreads("--jobs", o.jobs);
+  paco::app::validateThreads("--threads", o.threads, "one per hardware thread");
+  if (!(o.time_limit > 0.0))
+    throw paco::app::UsageError("--time-limit must be more than 0 seconds, got " + paco::app::shortNumber(o.time_limit));
   paco::app::validateNoiseAdaptation(o.segment_noise_adaptation);
   if (o.observed_fusion != "on" && o.observed_fusion != "off")
     throw paco::app::UsageError("--observed-fusion must be on or off, got '" + o.observed_fusion + "'");
@@ -309,6 +312,7 @@ int run(int argc, char** argv) {
     printHelp(visible);
     return 0;
   }
+  if (o.samples < 1) throw paco::app::UsageError("--samples must be at least 1");
   const bool single_mode = !o.pred.empty() || !o.gt.empty() || !o.input.empty();
   if (single_mode && !o.dataset.empty()) throw paco::app::UsageError("give either --pred/--gt or --dataset, not both");
   if (o.score_failure) {

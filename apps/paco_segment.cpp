@@ -16,6 +16,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace po = boost::program_options;
 
@@ -66,6 +67,39 @@ void printHelp(const po::options_description& visible) {
 template <typename Segmenter>
 Segmenter* as(const paco::PlanarSegmenter<pcl::PointNormal>::Ptr& segmenter) {
   return dynamic_cast<Segmenter*>(segmenter.get());
+}
+
+// The segmenters' ranges, checked here to name the options.
+void validateOptions(const Options& o) {
+  using paco::app::shortNumber;
+  using paco::app::UsageError;
+  const auto fraction = [](const char* option, double value, bool zero_allowed) {
+    if (!((zero_allowed ? value >= 0.0 : value > 0.0) && value < 1.0))
+      throw UsageError(std::string(option) + " must be in " + (zero_allowed ? "[0, 1)" : "(0, 1)") +
+                       " (a fraction of the bounding-box diagonal), got " + shortNumber(value));
+  };
+  fraction("--epsilon", o.epsilon, false);
+  fraction("--cluster-epsilon", o.cluster_epsilon, true);
+  if (!(o.normal_threshold >= 0.0 && o.normal_threshold <= 1.0))
+    throw UsageError("--normal-threshold must be in [0, 1] (a |cosine|), got " + shortNumber(o.normal_threshold));
+  if (o.min_points < 3) throw UsageError("--min-points must be at least 3, got " + std::to_string(o.min_points));
+  if (o.min_parallel_points != 0 && o.min_parallel_points < 3)
+    throw UsageError("--min-parallel-points must be 0 (none) or at least 3, got " +
+                     std::to_string(o.min_parallel_points));
+  if (o.neighbours < 3) throw UsageError("--neighbours must be at least 3, got " + std::to_string(o.neighbours));
+  paco::app::validateThreads("--threads", o.threads, "all cores");
+  paco::app::validateNoiseAdaptation(o.noise_adaptation);
+  for (const auto& [option, lambda] : {std::pair<const char*, double>{"--lambda-simplicity", o.lambda_simplicity},
+                                       {"--lambda-completeness", o.lambda_completeness}})
+    if (!(lambda >= 0.0 && lambda < 3.0))
+      throw UsageError(std::string(option) + " must be in [0, 3), got " + shortNumber(lambda));
+  if (o.max_rounds < 0) throw UsageError("--max-rounds must be >= 0, got " + std::to_string(o.max_rounds));
+  if (!(o.curvature >= 0.0 && o.curvature <= 1.0 / 3.0))
+    throw UsageError("--curvature must be in [0, 1/3] (a surface variation), got " + shortNumber(o.curvature));
+  if (o.max_iterations < 1)
+    throw UsageError("--max-iterations must be at least 1, got " + std::to_string(o.max_iterations));
+  if (!(o.probability > 0.0 && o.probability < 1.0))
+    throw UsageError("--probability must be in (0, 1), got " + shortNumber(o.probability));
 }
 
 paco::PlanarSegmenter<pcl::PointNormal>::Ptr makeSegmenter(const Options& o) {
@@ -139,8 +173,9 @@ int run(int argc, char** argv) {
   if (o.output.empty()) throw paco::app::UsageError("expected -o LABELLED.pcd");
   paco::app::checkOutputPath(o.output, "-o", {".pcd", ".ply", ".xyz", ".npy", ".vg", ".bvg"});
   if (!o.vg.empty()) paco::app::checkOutputPath(o.vg, "--vg", {".vg", ".bvg"});
+  paco::app::checkOutputsAreNotInputs({{"INPUT", o.input}}, {{"-o", o.output}, {"--vg", o.vg}});
   // Check every parameter before reading a large file.
-  paco::app::validateNoiseAdaptation(o.noise_adaptation);
+  validateOptions(o);
   paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
   try {
     segmenter = makeSegmenter(o);

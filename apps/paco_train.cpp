@@ -24,6 +24,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace po = boost::program_options;
@@ -62,6 +63,7 @@ struct Options {
 int exportModel(const Options& o) {
   if (fs::exists(o.output) && fs::is_directory(o.output))
     throw paco::app::UsageError("--export writes a model file; -o '" + o.output + "' is a folder");
+  paco::app::checkOutputsAreNotInputs({{"--export", o.export_from}}, {{"-o", o.output}});
   paco::LoadedCheckpoint checkpoint = paco::loadCheckpoint(o.export_from);
   paco::saveCheckpoint(o.output, checkpoint.network);
   std::int64_t parameters = 0;
@@ -71,6 +73,23 @@ int exportModel(const Options& o) {
               static_cast<double>(fs::file_size(o.output)) / 1e6);
   return 0;
 }
+
+// Removes the checkpoint folder when this run created it and wrote nothing into it (a failed
+// run), so that a rerun is not taken for one to resume and no empty folder is left behind.
+class NewFolderCleanup {
+ public:
+  explicit NewFolderCleanup(fs::path folder) : folder_(std::move(folder)), existed_(fs::exists(folder_)) {}
+  ~NewFolderCleanup() {
+    std::error_code ec;
+    if (!existed_ && fs::is_directory(folder_, ec) && fs::is_empty(folder_, ec)) fs::remove(folder_, ec);
+  }
+  NewFolderCleanup(const NewFolderCleanup&) = delete;
+  NewFolderCleanup& operator=(const NewFolderCleanup&) = delete;
+
+ private:
+  fs::path folder_;
+  bool existed_;
+};
 
 void printHelp(const po::options_description& visible) {
   std::cout << "Usage: " << kTool << " DATASET_DIR -o CHECKPOINT_DIR [options]\n"
@@ -154,7 +173,17 @@ int run(int argc, char** argv) {
   }
   if (o.dataset.empty()) throw paco::app::UsageError("expected DATASET_DIR (a folder written by paco_dataset)");
   if (o.output.empty()) throw paco::app::UsageError("expected -o CHECKPOINT_DIR");
-  if (o.threads < 1) throw paco::app::UsageError("--threads must be >= 1");
+  paco::app::validateThreads("--threads", o.threads);
+  if (o.epochs < 0) throw paco::app::UsageError("--epochs must be >= 0, got " + std::to_string(o.epochs));
+  if (o.batch < 1) throw paco::app::UsageError("--batch must be at least 1, got " + std::to_string(o.batch));
+  if (!(o.lr > 0.0)) throw paco::app::UsageError("--lr must be more than 0, got " + paco::app::shortNumber(o.lr));
+  if (o.input_points < 1 || o.gt_points < 1)
+    throw paco::app::UsageError("--input-points and --gt-points must be at least 1, got " +
+                                std::to_string(o.input_points) + " and " + std::to_string(o.gt_points));
+  if (o.prefetch < 1) throw paco::app::UsageError("--prefetch must be at least 1, got " + std::to_string(o.prefetch));
+  if (o.checkpoint_every < 0)
+    throw paco::app::UsageError("--checkpoint-every must be >= 0 (0: only at epoch ends), got " +
+                                std::to_string(o.checkpoint_every));
   if (o.input_frame != "complete" && o.input_frame != "own")
     throw paco::app::UsageError("--input-frame must be 'complete' or 'own'");
   if (o.input_orientation != "as-is" && o.input_orientation != "seen-planes")
@@ -227,6 +256,7 @@ int run(int argc, char** argv) {
   if (train.size == 0)
     throw paco::InvalidInputError("dataset '" + o.dataset + "' has no training samples; build a larger one with paco_dataset");
 
+  const NewFolderCleanup cleanup(o.output);  // the trainer creates the folder
   paco::completion::Trainer trainer(options);
   if (o.resume) {
     if (vm.count("config") || !vm["preset"].defaulted())
