@@ -188,6 +188,20 @@ struct ScanKnowledgeFlags {
 inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
                               const PlanarSegmentation& segmentation, const FusionFlags& flags,
                               const ScanKnowledge& knowledge, StageTimer& timer) {
+  if (!knowledge.known_extent.empty()) {
+    // The object reaches the known extent and holds the scan: far apart, the two are most likely
+    // in different units or frames (the fill would then close a box around both).
+    Eigen::AlignedBox3d scan_box, known_box;
+    for (const auto& p : cloud) scan_box.extend(Eigen::Vector3d(p.x, p.y, p.z));
+    for (const auto& p : knowledge.known_extent) known_box.extend(p);
+    const double gap = (known_box.min() - scan_box.max()).cwiseMax(scan_box.min() - known_box.max()).cwiseMax(0.0).norm();
+    const double diagonal = scan_box.diagonal().norm();
+    if (gap > diagonal)
+      std::fprintf(stderr,
+                   "warning: --known-extent lies %.4g away from the scan, more than the scan's diagonal (%.4g): is it "
+                   "in the input's units and frame?\n",
+                   gap, diagonal);
+  }
   timer.start("fuse");
   ObservedFusionReport report;
   ObservedFusionOptions options;

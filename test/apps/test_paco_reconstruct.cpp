@@ -225,6 +225,14 @@ TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
       << log;
   paco::boundingBox(paco::io::loadMesh(dir.file("from_file.obj")), lo, hi);
   EXPECT_NEAR(hi.x(), 2.0, 0.01) << log;
+  // A known extent far from the scan is most likely in other units or another frame: a warning.
+  EXPECT_EQ(log.find("warning: --known-extent lies"), std::string::npos) << log;
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("far.obj")) + " --known-extent 100,100,100,101,101,101", &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("warning: --known-extent lies 171."),
+            std::string::npos)
+      << log;
   // Without it the mesh ends with the scan.
   ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("seen.obj")), &log), 0) << log;
   paco::boundingBox(paco::io::loadMesh(dir.file("seen.obj")), lo, hi);
