@@ -396,9 +396,12 @@ class ScannerView {
       s.b = r.dot(up_);
       s.distance = r.dot(along_);
     }
-    s.ia = static_cast<long long>(std::floor(s.a / bin_));
-    s.ib = static_cast<long long>(std::floor(s.b / bin_));
-    s.valid = std::abs(s.ia) < kMaxBin && std::abs(s.ib) < kMaxBin;
+    // Checked as doubles: casting a bin beyond the range of long long is undefined.
+    const double ia = std::floor(s.a / bin_), ib = std::floor(s.b / bin_);
+    if (!(std::abs(ia) < static_cast<double>(kMaxBin) && std::abs(ib) < static_cast<double>(kMaxBin))) return s;
+    s.ia = static_cast<long long>(ia);
+    s.ib = static_cast<long long>(ib);
+    s.valid = true;
     return s;
   }
   static long long key(long long ia, long long ib) { return ia * (2 * kMaxBin + 1) + ib; }
