@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 
 namespace paco::completion::detail {
 namespace {
@@ -55,12 +56,13 @@ void kdTreeNearest(const float* data, std::int64_t n_data, const float* queries,
   std::copy(found.begin(), found.end(), nearest);
   // FLANN finds nothing when every squared distance overflows a float (coordinates near 1e20), and
   // then returns an arbitrary index: the brute force below still returns a valid one.
-  const Columns columns(data, n_data);
+  std::optional<Columns> columns;  // copied only when a query needs the fallback
   std::vector<float> all;
   for (std::int64_t i = 0; i < n_queries; ++i) {
     if (nearest[i] >= 0 && nearest[i] < n_data && distances[static_cast<std::size_t>(i)] < kInfinity) continue;
+    if (!columns) columns.emplace(data, n_data);
     all.resize(static_cast<std::size_t>(n_data));
-    distancesTo(columns, n_data, queries[3 * i], queries[3 * i + 1], queries[3 * i + 2], all.data());
+    distancesTo(*columns, n_data, queries[3 * i], queries[3 * i + 1], queries[3 * i + 2], all.data());
     nearest[i] = argmin(all.data(), n_data);
   }
 }
