@@ -2,6 +2,7 @@
 
 #include <paco/common/error.h>
 #include <paco/common/primitive.h>
+#include <paco/common/surface_mesh.h>
 #include <paco/io/cloud_io.h>
 
 #include <fcntl.h>
@@ -143,6 +144,18 @@ void checkOutputsAreNotInputs(const std::vector<FileArgument>& inputs, const std
         throw UsageError(output.option + " '" + output.path + "' is the same file as " + outputs[earlier].option +
                          " '" + outputs[earlier].path + "'; give each output its own file name");
   }
+}
+
+void reportCoordinateOffset(const Eigen::Vector3d& offset) {
+  if (offset.isZero(0.0)) return;
+  // The offset is a tidy number (5412300), which %.15g prints in full.
+  std::printf("coordinates far from 0 for the scan's size: working relative to (%.15g, %.15g, %.15g) to keep "
+              "float32 precision; outputs are written in the input's coordinates\n",
+              offset.x(), offset.y(), offset.z());
+}
+
+void moveToFileCoordinates(SurfaceMesh& mesh, const Eigen::Vector3d& offset) {
+  for (Eigen::Vector3d& v : mesh.vertices) v += offset;
 }
 
 PlanarSegmentation segmentationFromLabels(const io::LabelledCloud& cloud, const std::string& path) {

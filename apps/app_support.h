@@ -1,6 +1,7 @@
 #pragma once
 // Shared plumbing of the paco_* tools: error reporting with a non-zero exit, timing, and output
 // files that appear only when complete (never a partial file after an error or Ctrl-C).
+#include <Eigen/Core>
 #include <boost/program_options.hpp>
 
 #include <chrono>
@@ -12,6 +13,7 @@
 // Declared only: this header stays free of PCL, which paco_train must include after LibTorch.
 namespace paco {
 struct PlanarSegmentation;
+struct SurfaceMesh;
 namespace io {
 struct LabelledCloud;
 }
@@ -64,6 +66,14 @@ void checkOutputsAreNotInputs(const std::vector<FileArgument>& inputs, const std
 /// and oriented by their mean normal. Throws InvalidInputError naming `path` and the label when a
 /// label has fewer than 3 points.
 PlanarSegmentation segmentationFromLabels(const io::LabelledCloud& cloud, const std::string& path);
+
+/// Prints where the working frame of a cloud read with a coordinate offset
+/// (io::LabelledCloud::coordinate_offset) is, and that outputs go back to the file's
+/// coordinates; nothing for a zero offset.
+void reportCoordinateOffset(const Eigen::Vector3d& offset);
+/// Moves a mesh made in the working frame of a cloud read with `offset` back to the file's
+/// coordinates (SurfaceMesh stores doubles, so nothing is lost).
+void moveToFileCoordinates(SurfaceMesh& mesh, const Eigen::Vector3d& offset);
 
 /// A number as --help shows a default: "0.7", not "0.69999999999999996".
 std::string shortNumber(double value);

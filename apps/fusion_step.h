@@ -105,8 +105,10 @@ inline std::vector<double> parseNumbers(const std::string& option, const std::st
 inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
   if (text.empty()) return {};
   if (std::filesystem::is_regular_file(text)) {
-    const std::vector<Eigen::Vector3d> points = positionsOf(io::loadCloud(text).points);  // finite: checked
+    const io::LabelledCloud cloud = io::loadCloud(text);  // finite: checked
+    std::vector<Eigen::Vector3d> points = positionsOf(cloud.points);
     if (points.empty()) throw IoError("--known-extent: '" + text + "' has no points");
+    for (Eigen::Vector3d& p : points) p += cloud.coordinate_offset;  // the file's coordinates
     return points;
   }
   const std::string form = "X0,Y0,Z0,X1,Y1,Z1 (a box) or an existing cloud file";
@@ -134,6 +136,15 @@ struct ScanKnowledge {
 
   bool empty() const {
     return known_extent.empty() && scanner_direction.squaredNorm() == 0.0 && !scanner_position;
+  }
+
+  /// The same knowledge in the working frame of a scan read with io::LabelledCloud::coordinate_offset
+  /// `offset`: positions move by -offset, the direction and the cell stay.
+  ScanKnowledge inWorkingFrame(const Eigen::Vector3d& offset) const {
+    ScanKnowledge moved = *this;
+    for (Eigen::Vector3d& p : moved.known_extent) p -= offset;
+    if (moved.scanner_position) *moved.scanner_position -= offset;
+    return moved;
   }
 };
 

@@ -40,15 +40,24 @@ void printHelp(const po::options_description& options) {
             << "planes, solver failure or time-out, empty or non-watertight result); 2 for bad usage.\n";
 }
 
-std::vector<paco::PlanarPrimitive> loadPrimitives(const std::string& path) {
-  const std::string extension = paco::io::extensionOf(path);
-  if (extension == ".vg" || extension == ".bvg") return paco::io::toPrimitives(paco::io::loadVertexGroups(path));
+/// The planar primitives of an input file, in the working frame of its coordinate offset
+/// (io::LabelledCloud::coordinate_offset), which the mesh must be moved back by.
+struct InputPrimitives {
+  std::vector<paco::PlanarPrimitive> primitives;
+  Eigen::Vector3d coordinate_offset = Eigen::Vector3d::Zero();
+};
 
+InputPrimitives loadPrimitives(const std::string& path) {
+  const std::string extension = paco::io::extensionOf(path);
+  if (extension == ".vg" || extension == ".bvg") {
+    const paco::io::VertexGroups groups = paco::io::loadVertexGroups(path);
+    return {paco::io::toPrimitives(groups), groups.coordinate_offset};
+  }
   paco::io::LabelledCloud cloud = paco::io::loadCloud(path);
   if (!cloud.hasLabels())
     throw paco::InvalidInputError("'" + path + "' has no per-point plane labels: segment it first with "
                                   "paco_segment, or give a .vg/.bvg file");
-  return paco::makePrimitives(cloud.points, paco::app::segmentationFromLabels(cloud, path));
+  return {paco::makePrimitives(cloud.points, paco::app::segmentationFromLabels(cloud, path)), cloud.coordinate_offset};
 }
 
 // The assembler's ranges, checked here to name the options and their units.
@@ -149,13 +158,15 @@ int run(int argc, char** argv) {
   paco::InterruptGuard interrupt_guard;
   paco::app::StageTimer timer;
   timer.start("load");
-  std::vector<paco::PlanarPrimitive> primitives = loadPrimitives(input);
+  InputPrimitives loaded = loadPrimitives(input);
+  std::vector<paco::PlanarPrimitive>& primitives = loaded.primitives;
   timer.stop();
   if (primitives.empty())
     throw paco::InvalidInputError("'" + input + "' holds no primitives (no vertex group or labelled point); a closed "
                                   "mesh needs at least 4 planes");
   assembler.setInputPrimitives(std::move(primitives));
   std::printf("loaded %zu primitives from %s\n", assembler.getInputPrimitives().size(), input.c_str());
+  paco::app::reportCoordinateOffset(loaded.coordinate_offset);
 
   timer.start("assemble");
   paco::SurfaceMesh mesh;
@@ -190,6 +201,7 @@ int run(int argc, char** argv) {
 
   timer.start("save");
   paco::app::PendingOutput pending(output);
+  paco::app::moveToFileCoordinates(mesh, loaded.coordinate_offset);
   paco::io::saveMesh(pending.writePath(), mesh);
   pending.commit();
   timer.stop();

@@ -157,6 +157,8 @@ int run(int argc, char** argv) {
   if (scan.points.empty()) throw paco::InvalidInputError("'" + o.input + "' holds no points");
   std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
               scan.has_normals ? ", with normals" : "");
+  paco::app::reportCoordinateOffset(scan.coordinate_offset);
+  const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // Labels name input points, so a labelled input is used as it is.
   const auto cloud = o.use_labels ? std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points)
                                   : paco::app::workingCloud(scan.points, o.max_points, timer);
@@ -185,7 +187,7 @@ int run(int argc, char** argv) {
 
   std::vector<paco::PlanarPrimitive> primitives =
       paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns, o.points, timer);
-  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, knowledge, timer);
+  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, scan_knowledge, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
                  kTool);
@@ -196,9 +198,13 @@ int run(int argc, char** argv) {
   paco::app::PendingOutput vg_out(o.output);
   std::unique_ptr<paco::app::PendingOutput> pcd_out;
   if (!o.pcd.empty()) pcd_out = std::make_unique<paco::app::PendingOutput>(o.pcd);
-  paco::io::saveVertexGroups(vg_out.writePath(), paco::io::toVertexGroups(primitives));
+  paco::io::VertexGroups groups = paco::io::toVertexGroups(primitives);
+  groups.coordinate_offset = scan.coordinate_offset;
+  paco::io::saveVertexGroups(vg_out.writePath(), groups);
   if (pcd_out) {
-    paco::io::saveCloud(pcd_out->writePath(), paco::io::primitivesToCloud(primitives));
+    paco::io::LabelledCloud coloured = paco::io::primitivesToCloud(primitives);
+    coloured.coordinate_offset = scan.coordinate_offset;
+    paco::io::saveCloud(pcd_out->writePath(), coloured);
   }
   vg_out.commit();
   if (pcd_out) pcd_out->commit();

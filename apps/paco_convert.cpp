@@ -86,8 +86,11 @@ int convertCloud(const Options& o, paco::app::StageTimer& timer) {
               cloud.has_normals ? ", with normals" : "", cloud.hasLabels() ? ", with labels" : "");
   if (o.normalize) {
     timer.start("normalise");
-    const auto norm = paco::Normalization::fromBoundingBox(cloud.points);
+    auto norm = paco::Normalization::fromBoundingBox(cloud.points);
     norm.apply(cloud.points);
+    // The points were relative to the coordinate offset: the centre to print is the file's.
+    norm.center += cloud.coordinate_offset;
+    cloud.coordinate_offset.setZero();
     timer.stop();
     printNormalization(norm);
   }

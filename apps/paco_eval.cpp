@@ -141,6 +141,7 @@ int single(const Options& o) {
     if (input.points.empty())
       throw paco::InvalidInputError("input cloud '" + o.input + "' has no points; give the partial scan the mesh was made from");
     seen = paco::positionsOf(input.points);
+    for (Eigen::Vector3d& p : seen) p += input.coordinate_offset;  // the meshes' coordinates
   }
   timer.stop();
   ev::MetricOptions options;

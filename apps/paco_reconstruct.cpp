@@ -169,6 +169,8 @@ int run(int argc, char** argv) {
   if (scan.points.empty()) throw paco::InvalidInputError("'" + o.input + "' holds no points");
   std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
               scan.has_normals ? ", with normals" : " (normals will be estimated)");
+  paco::app::reportCoordinateOffset(scan.coordinate_offset);
+  const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // A file without normals reads as zero normals, which the segmenter estimates.
   const auto cloud = paco::app::workingCloud(scan.points, o.max_points, timer);
 
@@ -196,7 +198,7 @@ int run(int argc, char** argv) {
   } else {
     primitives = paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns,
                                          paco::TurnEnsembleOptions().num_points, timer);
-    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, knowledge, timer);
+    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, scan_knowledge, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
@@ -226,11 +228,16 @@ int run(int argc, char** argv) {
   // Outputs appear only together and only when complete.
   timer.start("write");
   paco::app::PendingOutput mesh_out(o.output), vg_out(o.vg_output), pcd_out(o.pcd_output);
+  paco::app::moveToFileCoordinates(mesh, scan.coordinate_offset);
   paco::io::saveMesh(mesh_out.writePath(), mesh);
-  paco::io::saveVertexGroups(vg_out.writePath(), paco::io::toVertexGroups(primitives));
+  paco::io::VertexGroups groups = paco::io::toVertexGroups(primitives);
+  groups.coordinate_offset = scan.coordinate_offset;
+  paco::io::saveVertexGroups(vg_out.writePath(), groups);
   paco::io::CloudWriteOptions compressed;
   compressed.pcd_encoding = paco::io::PcdEncoding::BinaryCompressed;
-  paco::io::saveCloud(pcd_out.writePath(), paco::io::primitivesToCloud(primitives), compressed);
+  paco::io::LabelledCloud coloured = paco::io::primitivesToCloud(primitives);
+  coloured.coordinate_offset = scan.coordinate_offset;
+  paco::io::saveCloud(pcd_out.writePath(), coloured, compressed);
   mesh_out.commit();
   vg_out.commit();
   pcd_out.commit();

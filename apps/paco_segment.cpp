@@ -194,6 +194,7 @@ int run(int argc, char** argv) {
   timer.stop();
   std::printf("read '%s': %zu points%s\n", o.input.c_str(), cloud.points.size(),
               cloud.has_normals && !o.ignore_normals ? ", with normals" : "");
+  paco::app::reportCoordinateOffset(cloud.coordinate_offset);
   if (!cloud.has_normals || o.ignore_normals) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     for (auto& p : cloud.points) p.normal_x = p.normal_y = p.normal_z = nan;
@@ -226,6 +227,7 @@ int run(int argc, char** argv) {
     groups.points = cloud.points;
     groups.has_normals = true;
     groups.segmentation = result;
+    groups.coordinate_offset = cloud.coordinate_offset;
     paco::io::saveVertexGroups(vg_output->writePath(), groups);
   }
   labelled_output.commit();

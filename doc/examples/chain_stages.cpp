@@ -24,8 +24,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    // Any cloud, any units: .pcd, .ply, .xyz or .npy, with or without normals.
-    auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(paco::io::loadCloud(argv[1]).points);
+    // Any cloud, any units: .pcd, .ply, .xyz or .npy, with or without normals. Coordinates far from
+    // 0 for the object's size (UTM, national grids) come relative to scan.coordinate_offset.
+    const paco::io::LabelledCloud scan = paco::io::loadCloud(argv[1]);
+    auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
 
     // Stage 1: planar segmentation. Other backends: "region-growing", "ransac", "efficient-ransac".
     auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>("gocopp");
@@ -67,14 +69,16 @@ int main(int argc, char** argv) {
     assembler.setBackend("polyfit");
     assembler.setMipSolver("cbc");
     assembler.setInputPrimitives(primitives);
-    pcl::PolygonMesh mesh;
+    // paco::SurfaceMesh holds double vertices; reconstruct(pcl::PolygonMesh&) gives PCL's float32 mesh.
+    paco::SurfaceMesh mesh;
     const paco::AssemblyResult& result = assembler.reconstruct(mesh);
     if (!result.ok()) {
       std::cerr << "assembly failed: " << paco::toString(result.status) << ": " << result.message << "\n";
       return 1;
     }
-    paco::io::savePolygonMesh(argv[2], mesh);
-    std::cout << "mesh: " << mesh.polygons.size() << " faces -> " << argv[2] << "\n";
+    for (Eigen::Vector3d& v : mesh.vertices) v += scan.coordinate_offset;  // back to the file's coordinates
+    paco::io::saveMesh(argv[2], mesh);
+    std::cout << "mesh: " << mesh.faces.size() << " faces -> " << argv[2] << "\n";
     return 0;
   } catch (const paco::Error& e) {
     std::cerr << "error: " << e.what() << "\n";

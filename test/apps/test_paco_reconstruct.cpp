@@ -239,6 +239,41 @@ TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
   EXPECT_NEAR(hi.x(), 1.0, 0.01) << log;
 }
 
+// The same half box in UTM coordinates (northing 5.4e6, where float32 steps by 0.5 m, half the
+// box): read relative to a coordinate offset, the scan keeps its shape, the known extent given in
+// the file's coordinates applies, and every output is back in the file's coordinates.
+TEST(PacoReconstruct, NationalGridCoordinatesKeepTheirPrecision) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  writeHalfBoxScan(dir.file("half_box.pcd"), Eigen::Matrix3d::Identity());
+  paco::io::LabelledCloud scan = paco::io::loadCloud(dir.file("half_box.pcd"));
+  const Eigen::Vector3d corner(500000.25, 5412345.5, 100.125);
+  scan.coordinate_offset = corner;  // the points, 0..1, become corner + 0..1 in the file
+  paco::io::saveCloud(dir.file("utm.xyz"), scan);
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("utm.xyz")) + " --model " + quoted(dir.file("tiny.pt")) +
+                                       " --threshold 1 --assembler cell-complex --known-extent 500000.25,5412345.5,"
+                                       "100.125,500002.25,5412346.5,101.125 -o " + quoted(dir.file("utm.obj")),
+                                   &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("working relative to (500000, 5412350, 100)"), std::string::npos) << log;
+  const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("utm.obj"));
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  Eigen::Vector3d lo, hi;
+  paco::boundingBox(mesh, lo, hi);
+  EXPECT_LT((lo - corner).cwiseAbs().maxCoeff(), 0.01) << log;
+  EXPECT_LT((hi - corner - Eigen::Vector3d(2, 1, 1)).cwiseAbs().maxCoeff(), 0.01) << log;
+  EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 0.05) << log;
+  const paco::io::VertexGroups groups = paco::io::loadVertexGroups(dir.file("utm.vg"));
+  const paco::io::LabelledCloud coloured = paco::io::loadCloud(dir.file("utm_primitives.pcd"));
+  for (const Eigen::Vector3d& offset : {groups.coordinate_offset, coloured.coordinate_offset})
+    EXPECT_EQ(offset, Eigen::Vector3d(500000, 5412350, 100));
+  const Eigen::Vector3d first = coloured.points[0].getVector3fMap().cast<double>() + coloured.coordinate_offset - corner;
+  EXPECT_TRUE((first.array() > -0.01).all() && (first.array() < Eigen::Array3d(2.01, 1.01, 1.01)).all()) << first;
+}
+
 // A building-like case: the box and its scan turned by 30 degrees about z, the extent given as
 // the turned box's corners (a footprint at ground and roof height). The fill's box lies on the
 // seen walls' axes, so it encloses those corners tightly: the full box, volume 2.

@@ -233,8 +233,9 @@ TEST(CloudIo, ReadsBinaryPcdWithPaddingAndDoubleFields) {
   const LabelledCloud c = paco::io::loadCloud(dir.file("d.pcd"));
   ASSERT_EQ(c.points.size(), 2u);
   EXPECT_TRUE(c.has_normals);
-  EXPECT_EQ(c.points[1].x, 2.5f);
-  EXPECT_EQ(c.points[1].z, 1e6f);
+  // 1e6 is far for a cloud 1 unit wide: it goes to the offset (see CloudIoFarCoordinates).
+  EXPECT_EQ(c.points[1].x + c.coordinate_offset.x(), 2.5);
+  EXPECT_EQ(c.points[1].z + c.coordinate_offset.z(), 1e6);
   EXPECT_EQ(c.points[1].normal_z, 1.0f);
 }
 
@@ -643,4 +644,105 @@ TEST(CloudIo, PrimitivesToCloudLabelsAndColoursEveryPoint) {
   EXPECT_EQ(cloud.colours[2], paco::io::primitiveColour(1));
   EXPECT_NE(paco::io::primitiveColour(0), paco::io::primitiveColour(1));
   EXPECT_TRUE(cloud.has_normals);
+}
+
+namespace {
+
+/// Points of a 12 x 8 x 6 m box in UTM coordinates (northing 5.4e6, where float32 steps by 0.5 m),
+/// given to the centimetre as a surveyor's file would.
+std::vector<Eigen::Vector3d> utmBoxPoints() {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 3; ++k)
+        points.emplace_back(std::round((500000.12 + 3.0 * i) * 100) / 100, std::round((5412345.81 + 2.67 * j) * 100) / 100,
+                            std::round((100.5 + 3.0 * k) * 100) / 100);
+  return points;
+}
+
+std::string xyzText(const std::vector<Eigen::Vector3d>& points) {
+  std::string text;
+  char line[128];
+  for (const auto& p : points) {
+    std::snprintf(line, sizeof line, "%.2f %.2f %.2f\n", p.x(), p.y(), p.z());
+    text += line;
+  }
+  return text;
+}
+
+/// The largest distance between the file coordinates a cloud holds (points + offset) and `truth`.
+double largestError(const LabelledCloud& cloud, const std::vector<Eigen::Vector3d>& truth) {
+  EXPECT_EQ(cloud.points.size(), truth.size());
+  double error = 0.0;
+  for (std::size_t i = 0; i < std::min(cloud.points.size(), truth.size()); ++i)
+    error = std::max(error, (cloud.points[i].getVector3fMap().cast<double>() + cloud.coordinate_offset - truth[i]).norm());
+  return error;
+}
+
+}  // namespace
+
+TEST(CloudIoFarCoordinates, NationalGridCoordinatesKeepTheirPrecisionThroughEveryFormat) {
+  TempDir dir;
+  const std::vector<Eigen::Vector3d> truth = utmBoxPoints();
+  writeBytes(dir.file("utm.xyz"), xyzText(truth));
+  const LabelledCloud cloud = paco::io::loadCloud(dir.file("utm.xyz"));
+  // The centre (500006.12, 5412349.8, 103.5) rounded to the hundred at or above the 15.6 m diagonal.
+  EXPECT_EQ(cloud.coordinate_offset, Eigen::Vector3d(500000.0, 5412300.0, 100.0));
+  EXPECT_LT(largestError(cloud, truth), 1e-5);
+  // Stored as float32 without the offset, the northing would be off by up to 0.25 m.
+  EXPECT_GT(std::abs(static_cast<double>(static_cast<float>(truth[1].y())) - truth[1].y()), 0.01);
+
+  for (const std::string name : {"a.pcd", "b.pcd", "c.pcd", "a.ply", "b.ply", "a.xyz", "a.npy", "a.vg"}) {
+    SCOPED_TRACE(name);
+    paco::io::CloudWriteOptions options;
+    options.pcd_encoding = name == "a.pcd"   ? paco::io::PcdEncoding::Ascii
+                           : name == "b.pcd" ? paco::io::PcdEncoding::Binary
+                                             : paco::io::PcdEncoding::BinaryCompressed;
+    options.ascii_ply = name == "a.ply";
+    LabelledCloud labelled = cloud;
+    if (name == "a.vg") labelled.labels.assign(cloud.points.size(), 0);  // one plane group: all of them
+    paco::io::saveCloud(dir.file(name), labelled, options);
+    const LabelledCloud back = paco::io::loadCloud(dir.file(name));
+    EXPECT_EQ(back.coordinate_offset, cloud.coordinate_offset);
+    EXPECT_LT(largestError(back, truth), 1e-5);
+  }
+  // Text keeps the file's own digits: 123.45f plus the offset prints as the decimal it was read from.
+  EXPECT_NE(readBytes(dir.file("a.xyz")).find("500000.12 5412345.81 100.5\n"), std::string::npos);
+}
+
+TEST(CloudIoFarCoordinates, CloudsNearTheOriginHaveNoOffsetAndWriteFloat32) {
+  TempDir dir;
+  writeBytes(dir.file("near.xyz"), "0 0 0\n1.5 2 3\n-20 4 1\n");
+  const LabelledCloud cloud = paco::io::loadCloud(dir.file("near.xyz"));
+  EXPECT_TRUE(cloud.coordinate_offset.isZero(0.0));
+  EXPECT_EQ(cloud.points[1].x, 1.5f);
+  paco::io::saveCloud(dir.file("near.ply"), cloud);
+  EXPECT_NE(readBytes(dir.file("near.ply")).find("property float x\n"), std::string::npos);
+  // 1 m at 100 m from the origin: float32 rounds by 6e-6 of the size at most, below the 1e-5 bound.
+  writeBytes(dir.file("aside.xyz"), "100 100 100\n101 100 100\n100 101 100.5\n");
+  EXPECT_TRUE(paco::io::loadCloud(dir.file("aside.xyz")).coordinate_offset.isZero(0.0));
+}
+
+TEST(CloudIoFarCoordinates, TheOffsetCanBeTurnedOff) {
+  TempDir dir;
+  const std::vector<Eigen::Vector3d> truth = utmBoxPoints();
+  writeBytes(dir.file("utm.xyz"), xyzText(truth));
+  paco::io::CloudReadOptions options;
+  options.offset_far_coordinates = false;
+  const LabelledCloud cloud = paco::io::loadCloud(dir.file("utm.xyz"), options);
+  EXPECT_TRUE(cloud.coordinate_offset.isZero(0.0));
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    EXPECT_LE((cloud.points[i].getVector3fMap().cast<double>() - truth[i]).norm(), 0.5) << i;  // float32's step
+  EXPECT_GT(largestError(cloud, truth), 0.01);
+}
+
+TEST(CloudIoFarCoordinates, ThePointOfANonFiniteErrorIsNamedInFileCoordinates) {
+  TempDir dir;
+  writeBytes(dir.file("utm.xyz"), xyzText(utmBoxPoints()) + "500001.25 5412346.5 nan\n");
+  try {
+    paco::io::loadCloud(dir.file("utm.xyz"));
+    FAIL() << "no error";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("(500001.25, 5412346.5, nan)"), std::string::npos) << e.what();
+  }
 }

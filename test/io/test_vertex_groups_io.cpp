@@ -190,3 +190,27 @@ TEST(VertexGroupsIoErrors, MissingEmptyTruncatedMalformedNonFinite) {
 }
 
 }  // namespace
+
+TEST(VertexGroupsIo, FarCoordinatesMoveToTheOffsetWithTheirPlanes) {
+  // Four points of the wall x = 500003.5 at a UTM northing, and the wall's plane as PolyFit writes it.
+  TempDir dir;
+  writeBytes(dir.file("wall.vg"),
+             "num_points: 4\n500003.5 5412345.25 100.5\n500003.5 5412349.75 100.5\n500003.5 5412345.25 106\n"
+             "500003.5 5412349.75 106\nnum_colors: 0\nnum_normals: 0\nnum_groups: 1\ngroup_type: 0\n"
+             "num_group_parameters: 4\ngroup_parameters: 1 0 0 -500003.5\ngroup_label: unknown\n"
+             "group_color: 1 0 0\ngroup_num_point: 4\n0 1 2 3\nnum_children: 0\n");
+  const paco::io::VertexGroups vg = paco::io::loadVertexGroups(dir.file("wall.vg"));
+  // The centre (500003.5, 5412347.5, 103.25) rounded to the ten at or above the 7.1 m diagonal.
+  EXPECT_EQ(vg.coordinate_offset, Eigen::Vector3d(500000.0, 5412350.0, 100.0));
+  EXPECT_FLOAT_EQ(vg.points[1].y, -0.25f);
+  // The plane moved with the points: it is x = 3.5 in the points' frame.
+  const Plane& plane = vg.segmentation.planes.at(0);
+  EXPECT_DOUBLE_EQ(plane.offset, -3.5);
+  for (const auto& p : vg.points) EXPECT_NEAR(plane.signedDistance(p.getVector3fMap().cast<double>()), 0.0, 1e-9);
+
+  // Written back, points and plane are in the file's coordinates again, digit for digit.
+  paco::io::saveVertexGroups(dir.file("back.vg"), vg);
+  const std::string text = readBytes(dir.file("back.vg"));
+  EXPECT_NE(text.find("500003.5 5412349.75 106\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("group_parameters: 1 0 0 -500003.5\n"), std::string::npos) << text;
+}

@@ -37,11 +37,15 @@ LabelledCloud readPlyCloud(const std::string& path, const std::string& bytes) {
   const std::size_t n = vertex->count;
   cloud.points.resize(n);
   if (ilabel >= 0) cloud.labels.resize(n);
+  Eigen::AlignedBox3d box;
+  for (std::size_t p = 0; p < n; ++p) extendFinite(box, vertex->scalars[ix][p], vertex->scalars[iy][p], vertex->scalars[iz][p]);
+  cloud.coordinate_offset = precisionOffset(box);
+  const Eigen::Vector3d& offset = cloud.coordinate_offset;
   for (std::size_t p = 0; p < n; ++p) {
     pcl::PointNormal& q = cloud.points[p];
-    q.x = static_cast<float>(vertex->scalars[ix][p]);
-    q.y = static_cast<float>(vertex->scalars[iy][p]);
-    q.z = static_cast<float>(vertex->scalars[iz][p]);
+    q.x = static_cast<float>(vertex->scalars[ix][p] - offset.x());
+    q.y = static_cast<float>(vertex->scalars[iy][p] - offset.y());
+    q.z = static_cast<float>(vertex->scalars[iz][p] - offset.z());
     q.normal_x = has_normals ? static_cast<float>(vertex->scalars[inx][p]) : 0.0f;
     q.normal_y = has_normals ? static_cast<float>(vertex->scalars[iny][p]) : 0.0f;
     q.normal_z = has_normals ? static_cast<float>(vertex->scalars[inz][p]) : 0.0f;
@@ -54,10 +58,13 @@ LabelledCloud readPlyCloud(const std::string& path, const std::string& bytes) {
 std::string writePlyCloud(const LabelledCloud& cloud, bool ascii) {
   const std::size_t n = cloud.points.size();
   const bool labels = cloud.hasLabels();
+  const Eigen::Vector3d& offset = cloud.coordinate_offset;
+  const bool offset_positions = !offset.isZero(0.0);
   std::string out = "ply\nformat ";
   out += ascii ? "ascii 1.0\n" : "binary_little_endian 1.0\n";
-  out += "comment written by paco\nelement vertex " + std::to_string(n) +
-         "\nproperty float x\nproperty float y\nproperty float z\n";
+  out += "comment written by paco\nelement vertex " + std::to_string(n) + "\n";
+  out += offset_positions ? "property double x\nproperty double y\nproperty double z\n"
+                          : "property float x\nproperty float y\nproperty float z\n";
   if (cloud.has_normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
   if (labels) out += "property int label\n";
   out += "end_header\n";
@@ -68,12 +75,15 @@ std::string writePlyCloud(const LabelledCloud& cloud, bool ascii) {
     if (ascii) {
       for (std::size_t k = 0; k < count; ++k) {
         if (k) out += ' ';
-        appendFloat(out, v[k]);
+        appendCoordinate(out, v[k], k < 3 ? offset[static_cast<Eigen::Index>(k)] : 0.0);
       }
       if (labels) out += ' ' + std::to_string(cloud.labels[i]);
       out += '\n';
     } else {
-      for (std::size_t k = 0; k < count; ++k) appendBinary(out, v[k]);
+      for (std::size_t k = 0; k < count; ++k) {
+        if (k < 3 && offset_positions) appendBinary(out, unshift(v[k], offset[static_cast<Eigen::Index>(k)]));
+        else appendBinary(out, v[k]);
+      }
       if (labels) appendBinary(out, static_cast<std::int32_t>(cloud.labels[i]));
     }
   }
@@ -85,6 +95,7 @@ LabelledCloud readXyz(const std::string& path, const std::string& bytes) {
   TextCursor text(bytes, utf8BomLength(bytes));
   std::string_view line;
   std::vector<std::string_view> tok;
+  std::vector<double> positions;  // x y z of each point
   std::size_t columns = 0;
   for (std::size_t line_number = 1; text.nextLine(line); ++line_number) {
     const std::size_t hash = line.find('#');
@@ -108,15 +119,24 @@ LabelledCloud readXyz(const std::string& path, const std::string& bytes) {
       if (!parseDouble(tok[k], v[k]))
         fail(path, "malformed: '" + std::string(tok[k]) + "' on line " + std::to_string(line_number) +
                        " is not a number");
+    // Positions stay in double until the offset is known; normals go to the points now.
+    positions.insert(positions.end(), v, v + 3);
     pcl::PointNormal q;
-    q.x = static_cast<float>(v[0]);
-    q.y = static_cast<float>(v[1]);
-    q.z = static_cast<float>(v[2]);
     q.normal_x = static_cast<float>(v[3]);
     q.normal_y = static_cast<float>(v[4]);
     q.normal_z = static_cast<float>(v[5]);
     q.curvature = 0.0f;
     cloud.points.push_back(q);
+  }
+  Eigen::AlignedBox3d box;
+  for (std::size_t p = 0; p < cloud.points.size(); ++p)
+    extendFinite(box, positions[3 * p], positions[3 * p + 1], positions[3 * p + 2]);
+  cloud.coordinate_offset = precisionOffset(box);
+  for (std::size_t p = 0; p < cloud.points.size(); ++p) {
+    pcl::PointNormal& q = cloud.points[p];
+    q.x = static_cast<float>(positions[3 * p] - cloud.coordinate_offset.x());
+    q.y = static_cast<float>(positions[3 * p + 1] - cloud.coordinate_offset.y());
+    q.z = static_cast<float>(positions[3 * p + 2] - cloud.coordinate_offset.z());
   }
   return cloud;
 }
@@ -124,12 +144,13 @@ LabelledCloud readXyz(const std::string& path, const std::string& bytes) {
 std::string writeXyz(const LabelledCloud& cloud) {
   std::string out;
   out.reserve(cloud.points.size() * (cloud.has_normals ? 80 : 40));
+  const Eigen::Vector3d& offset = cloud.coordinate_offset;
   for (const auto& p : cloud.points) {
     const float v[6] = {p.x, p.y, p.z, p.normal_x, p.normal_y, p.normal_z};
     const std::size_t count = cloud.has_normals ? 6 : 3;
     for (std::size_t k = 0; k < count; ++k) {
       if (k) out += ' ';
-      appendFloat(out, v[k]);
+      appendCoordinate(out, v[k], k < 3 ? offset[static_cast<Eigen::Index>(k)] : 0.0);
     }
     out += '\n';
   }
@@ -149,11 +170,15 @@ LabelledCloud cloudFromNpy(const std::string& path, const NpyArray& a) {
   LabelledCloud cloud;
   cloud.points.resize(a.rows);
   cloud.has_normals = a.cols >= 6;
+  Eigen::AlignedBox3d box;
+  for (std::size_t r = 0; r < a.rows; ++r) detail::extendFinite(box, a.at(r, 0), a.at(r, 1), a.at(r, 2));
+  cloud.coordinate_offset = detail::precisionOffset(box);
+  const Eigen::Vector3d& offset = cloud.coordinate_offset;
   for (std::size_t r = 0; r < a.rows; ++r) {
     pcl::PointNormal& q = cloud.points[r];
-    q.x = static_cast<float>(a.at(r, 0));
-    q.y = static_cast<float>(a.at(r, 1));
-    q.z = static_cast<float>(a.at(r, 2));
+    q.x = static_cast<float>(a.at(r, 0) - offset.x());
+    q.y = static_cast<float>(a.at(r, 1) - offset.y());
+    q.z = static_cast<float>(a.at(r, 2) - offset.z());
     q.normal_x = cloud.has_normals ? static_cast<float>(a.at(r, 3)) : 0.0f;
     q.normal_y = cloud.has_normals ? static_cast<float>(a.at(r, 4)) : 0.0f;
     q.normal_z = cloud.has_normals ? static_cast<float>(a.at(r, 5)) : 0.0f;
@@ -177,7 +202,7 @@ NpyArray npyFromCloud(const LabelledCloud& cloud) {
   for (std::size_t r = 0; r < a.rows; ++r) {
     const pcl::PointNormal& p = cloud.points[r];
     double* row = a.data.data() + r * a.cols;
-    row[0] = p.x; row[1] = p.y; row[2] = p.z;
+    for (int k = 0; k < 3; ++k) row[k] = detail::unshift(p.data[k], cloud.coordinate_offset[k]);
     if (a.cols >= 6 && cloud.has_normals) {
       row[3] = p.normal_x; row[4] = p.normal_y; row[5] = p.normal_z;
     }
@@ -191,6 +216,7 @@ VertexGroups vertexGroupsFromCloud(const std::string& path, const LabelledCloud&
   VertexGroups vg;
   vg.points = cloud.points;
   vg.has_normals = cloud.has_normals;
+  vg.coordinate_offset = cloud.coordinate_offset;
   PlanarSegmentation& seg = vg.segmentation;
   seg.labels = cloud.hasLabels() ? cloud.labels : std::vector<int>(cloud.points.size(), -1);
   int max_label = -1;
@@ -232,6 +258,7 @@ LabelledCloud cloudFromVertexGroups(VertexGroups vg) {
   LabelledCloud cloud;
   cloud.points = std::move(vg.points);
   cloud.has_normals = vg.has_normals;
+  cloud.coordinate_offset = vg.coordinate_offset;
   cloud.labels = std::move(vg.segmentation.labels);
   if (vg.segmentation.segments.empty()) cloud.labels.clear();
   return cloud;
@@ -251,8 +278,9 @@ void applyNonFinitePolicy(const std::string& path, LabelledCloud& cloud, NonFini
     const auto& p = cloud.points[first_bad];
     fail(path, std::to_string(bad) + " of " + detail::plural(cloud.points.size(), "point") +
                    " have non-finite (NaN/Inf) coordinates, the first is point " + std::to_string(first_bad) +
-                   " (" + detail::numberText(p.x) + ", " + detail::numberText(p.y) + ", " +
-                   detail::numberText(p.z) + "); drop them with NonFinitePolicy::Drop (the tools' --drop-non-finite)");
+                   " (" + detail::numberText(detail::unshift(p.x, cloud.coordinate_offset.x())) + ", " +
+                   detail::numberText(detail::unshift(p.y, cloud.coordinate_offset.y())) + ", " +
+                   detail::numberText(detail::unshift(p.z, cloud.coordinate_offset.z())) + "); drop them with NonFinitePolicy::Drop (the tools' --drop-non-finite)");
   }
   std::size_t kept = 0;
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
@@ -304,6 +332,10 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
   } else {
     fail(path, "unknown point cloud extension '" + ext + "'; use .pcd, .ply, .xyz, .npy, .vg or .bvg");
   }
+  if (!options.offset_far_coordinates && !cloud.coordinate_offset.isZero(0.0)) {
+    for (auto& p : cloud.points) p.getVector3fMap() = (p.getVector3fMap().cast<double>() + cloud.coordinate_offset).cast<float>();
+    cloud.coordinate_offset.setZero();
+  }
   applyNonFinitePolicy(path, cloud, options.non_finite);
   treatNonFiniteNormalsAsMissing(cloud);
   if (cloud.points.empty()) fail(path, "holds no points");
@@ -328,7 +360,7 @@ void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudW
   } else if (ext == ".xyz") {
     detail::writeWholeFile(path, detail::writeXyz(cloud));
   } else if (ext == ".npy") {
-    saveNpy(path, npyFromCloud(cloud));
+    saveNpy(path, npyFromCloud(cloud), /*float64=*/!cloud.coordinate_offset.isZero(0.0));
   } else if (ext == ".vg" || ext == ".bvg") {
     saveVertexGroups(path, vertexGroupsFromCloud(path, cloud));
   } else {

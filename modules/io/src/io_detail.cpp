@@ -3,6 +3,7 @@
 #include <paco/common/error.h>
 
 #include <cerrno>
+#include <cmath>
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -65,6 +66,36 @@ void appendDouble(std::string& out, double value) {
   char buffer[40];
   const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
   out.append(buffer, result.ptr);
+}
+
+Eigen::Vector3d precisionOffset(const Eigen::AlignedBox3d& finite_box) {
+  if (finite_box.isEmpty()) return Eigen::Vector3d::Zero();
+  const double diagonal = finite_box.diagonal().norm();
+  const double largest = finite_box.min().cwiseAbs().cwiseMax(finite_box.max().cwiseAbs()).maxCoeff();
+  // float32 rounds to within 2^-24 of the value.
+  if (!(diagonal > 0.0) || largest * 0x1p-24 <= 1e-5 * diagonal) return Eigen::Vector3d::Zero();
+  const double step = std::pow(10.0, std::ceil(std::log10(diagonal)));
+  const Eigen::Vector3d centre = finite_box.center();
+  const Eigen::Vector3d tidy = (centre / step).array().round().matrix() * step;
+  return tidy.allFinite() ? tidy : centre;
+}
+
+void extendFinite(Eigen::AlignedBox3d& box, double x, double y, double z) {
+  if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) box.extend(Eigen::Vector3d(x, y, z));
+}
+
+double unshift(float value, double offset) {
+  if (offset == 0.0 || !std::isfinite(value)) return static_cast<double>(value) + offset;
+  char buffer[32];
+  const auto printed = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  double decimal = value;
+  std::from_chars(buffer, printed.ptr, decimal);
+  return decimal + offset;
+}
+
+void appendCoordinate(std::string& out, float value, double offset) {
+  if (offset == 0.0) appendFloat(out, value);
+  else appendDouble(out, unshift(value, offset));
 }
 
 bool parseDouble(std::string_view token, double& value) {

@@ -1,6 +1,8 @@
 #pragma once
 // Internal helpers of paco::io: error messages that name the file, whole-file reading with the
 // usual checks, bounds-checked byte and text cursors, and exact number formatting.
+#include <Eigen/Geometry>
+
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -23,6 +25,23 @@ void writeWholeFile(const std::string& path, const std::string& bytes);
 /// The shortest text that reads back to the same float / double (at most 9 / 17 digits).
 void appendFloat(std::string& out, float value);
 void appendDouble(std::string& out, double value);
+
+/// The offset a reader subtracts from every position before storing it as float32
+/// (LabelledCloud::coordinate_offset). Zero unless float32 would round the coordinates of
+/// `finite_box` by more than 1e-5 of its diagonal (coordinates more than ~170 diagonals from 0, as
+/// in national grids); then the box centre rounded to a multiple of the power of ten at or above
+/// the diagonal, so that the offset reads as a tidy number (85000, 446000). Zero for an empty or
+/// single-point box.
+Eigen::Vector3d precisionOffset(const Eigen::AlignedBox3d& finite_box);
+/// Grows `box` by (x, y, z) when all three are finite.
+void extendFinite(Eigen::AlignedBox3d& box, double x, double y, double z);
+/// offset + value as a double, where `value` counts as its shortest decimal text ("0.1f" as
+/// 0.1), so that a coordinate read as "85123.45" and stored as 123.45f writes back as 85123.45.
+/// Exactly `value` when offset is 0.
+double unshift(float value, double offset);
+/// Appends one coordinate of a point stored relative to `offset` (one component of it) as text:
+/// the float's shortest text for a zero offset, else unshift's double.
+void appendCoordinate(std::string& out, float value, double offset);
 
 /// Parses a whole token as a number; false when it is not one (trailing garbage included).
 bool parseDouble(std::string_view token, double& value);

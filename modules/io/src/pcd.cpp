@@ -218,12 +218,19 @@ LabelledCloud readPcd(const std::string& path, const std::string& bytes) {
   cloud.points.resize(points);
   if (ilabel >= 0) cloud.labels.resize(points);
   const std::size_t nf = fields.size();
+  Eigen::AlignedBox3d box;
+  for (std::size_t p = 0; p < points; ++p) {
+    const double* row = values.data() + p * nf;
+    extendFinite(box, row[ix], row[iy], row[iz]);
+  }
+  cloud.coordinate_offset = precisionOffset(box);
+  const Eigen::Vector3d& offset = cloud.coordinate_offset;
   for (std::size_t p = 0; p < points; ++p) {
     const double* row = values.data() + p * nf;
     pcl::PointNormal& q = cloud.points[p];
-    q.x = static_cast<float>(row[ix]);
-    q.y = static_cast<float>(row[iy]);
-    q.z = static_cast<float>(row[iz]);
+    q.x = static_cast<float>(row[ix] - offset.x());
+    q.y = static_cast<float>(row[iy] - offset.y());
+    q.z = static_cast<float>(row[iz] - offset.z());
     q.normal_x = has_normals ? static_cast<float>(row[inx]) : 0.0f;
     q.normal_y = has_normals ? static_cast<float>(row[iny]) : 0.0f;
     q.normal_z = has_normals ? static_cast<float>(row[inz]) : 0.0f;
@@ -252,8 +259,11 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
   if (labels) out += " label";
   const std::size_t nfloat = cloud.has_normals ? 6 : 3;
   const std::size_t nf = nfloat + (colours ? 1 : 0) + (labels ? 1 : 0);
+  // With a coordinate offset, x y z are written as doubles ("F 8") holding points + offset.
+  const Eigen::Vector3d& offset = cloud.coordinate_offset;
+  const bool offset_positions = !offset.isZero(0.0);
   out += "\nSIZE";
-  for (std::size_t i = 0; i < nf; ++i) out += " 4";
+  for (std::size_t i = 0; i < nf; ++i) out += (offset_positions && i < 3) ? " 8" : " 4";
   out += "\nTYPE";
   // Colours are "rgb F 4" holding the packed 0xRRGGBB bits, as PCL's PointXYZRGB writes them.
   // Labels are "U 4" like PCL's PointXYZL (pcl::fromPCLPointCloud2 matches the type too); -1 is
@@ -274,7 +284,7 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
       floats(i, v);
       for (std::size_t k = 0; k < nfloat; ++k) {
         if (k) out += ' ';
-        appendFloat(out, v[k]);
+        appendCoordinate(out, v[k], k < 3 ? offset[static_cast<Eigen::Index>(k)] : 0.0);
       }
       if (colours) {
         // PCL's ascii rgb is the float whose bits are the packed colour.
@@ -288,21 +298,25 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
     }
   } else if (encoding == PcdEncoding::Binary) {
     out += "binary\n";
-    out.reserve(out.size() + n * nf * 4);
+    out.reserve(out.size() + n * nf * 8);
     for (std::size_t i = 0; i < n; ++i) {
       floats(i, v);
-      for (std::size_t k = 0; k < nfloat; ++k) appendBinary(out, v[k]);
+      for (std::size_t k = 0; k < nfloat; ++k) {
+        if (offset_positions && k < 3) appendBinary(out, unshift(v[k], offset[static_cast<Eigen::Index>(k)]));
+        else appendBinary(out, v[k]);
+      }
       if (colours) appendBinary(out, cloud.colours[i]);
       if (labels) appendBinary(out, static_cast<std::uint32_t>(cloud.labels[i]));
     }
   } else {
     out += "binary_compressed\n";
     std::string soa;
-    soa.reserve(n * nf * 4);
+    soa.reserve(n * nf * 8);
     for (std::size_t k = 0; k < nfloat; ++k)
       for (std::size_t i = 0; i < n; ++i) {
         floats(i, v);
-        appendBinary(soa, v[k]);
+        if (offset_positions && k < 3) appendBinary(soa, unshift(v[k], offset[static_cast<Eigen::Index>(k)]));
+        else appendBinary(soa, v[k]);
       }
     if (colours)
       for (std::size_t i = 0; i < n; ++i) appendBinary(soa, cloud.colours[i]);

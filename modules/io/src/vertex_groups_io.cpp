@@ -203,32 +203,43 @@ VertexGroups loadVertexGroups(const std::string& path) {
   vg.points.resize(num_points);
   const auto readVectors = [&](const char* what, auto&& store) {
     for (std::size_t i = 0; i < num_points; ++i) {
-      float v[3];
+      double v[3];
       for (int k = 0; k < 3; ++k) {
-        const double value = in.value(what);
-        if (!std::isfinite(value))
+        v[k] = in.value(what);
+        if (!std::isfinite(v[k]))
           fail(path, std::string("point ") + std::to_string(i) + " has non-finite (NaN/Inf) " + what);
-        v[k] = static_cast<float>(value);
       }
       store(i, v);
     }
   };
-  readVectors("coordinates", [&](std::size_t i, const float* v) {
-    vg.points[i].x = v[0]; vg.points[i].y = v[1]; vg.points[i].z = v[2];
-    vg.points[i].normal_x = vg.points[i].normal_y = vg.points[i].normal_z = 0.0f;
-    vg.points[i].curvature = 0.0f;
+  // Positions stay in double until the coordinate offset is known.
+  std::vector<Eigen::Vector3d> positions(num_points);
+  Eigen::AlignedBox3d box;
+  readVectors("coordinates", [&](std::size_t i, const double* v) {
+    positions[i] = Eigen::Vector3d(v[0], v[1], v[2]);
+    box.extend(positions[i]);
   });
+  vg.coordinate_offset = detail::precisionOffset(box);
+  for (std::size_t i = 0; i < num_points; ++i) {
+    pcl::PointNormal& p = vg.points[i];
+    p.getVector3fMap() = (positions[i] - vg.coordinate_offset).cast<float>();
+    p.normal_x = p.normal_y = p.normal_z = 0.0f;
+    p.curvature = 0.0f;
+  }
+  positions = {};
   const std::int64_t num_colors = in.count("num_colors");
   if (num_colors != 0 && num_colors != n)
     fail(path, "malformed: num_colors is " + std::to_string(num_colors) + ", expected 0 or " + std::to_string(n));
-  if (num_colors) readVectors("colours", [](std::size_t, const float*) {});
+  if (num_colors) readVectors("colours", [](std::size_t, const double*) {});
   const std::int64_t num_normals = in.count("num_normals");
   if (num_normals != 0 && num_normals != n)
     fail(path, "malformed: num_normals is " + std::to_string(num_normals) + ", expected 0 or " + std::to_string(n));
   vg.has_normals = num_normals > 0;
   if (num_normals)
-    readVectors("normals", [&](std::size_t i, const float* v) {
-      vg.points[i].normal_x = v[0]; vg.points[i].normal_y = v[1]; vg.points[i].normal_z = v[2];
+    readVectors("normals", [&](std::size_t i, const double* v) {
+      vg.points[i].normal_x = static_cast<float>(v[0]);
+      vg.points[i].normal_y = static_cast<float>(v[1]);
+      vg.points[i].normal_z = static_cast<float>(v[2]);
     });
 
   const std::int64_t num_groups = in.count("num_groups");
@@ -261,6 +272,7 @@ VertexGroups loadVertexGroups(const std::string& path) {
       const Eigen::Vector3d normal(g.parameters[0], g.parameters[1], g.parameters[2]);
       if (normal.allFinite() && std::isfinite(g.parameters[3]) && normal.norm() > 1e-12) {
         plane = Plane(normal, g.parameters[3]);
+        plane.offset += plane.normal.dot(vg.coordinate_offset);  // into the points' frame
         have_plane = true;
       }
     }
@@ -321,6 +333,10 @@ void saveVertexGroups(const std::string& path, const VertexGroups& vg) {
     return Eigen::Vector3f(p.normal_x, p.normal_y, p.normal_z);
   };
 
+  // Planes as the file holds them: n.(x - offset) + d = 0 is n.x + (d - n.offset) = 0.
+  const Eigen::Vector3d& offset = vg.coordinate_offset;
+  const auto fileOffset = [&](const Plane& plane) { return plane.offset - plane.normal.dot(offset); };
+
   std::string out;
   if (ext == ".vg") {
     const auto vec = [&](float a, float b, float c) {
@@ -332,7 +348,13 @@ void saveVertexGroups(const std::string& path, const VertexGroups& vg) {
       out += '\n';
     };
     out += "num_points: " + std::to_string(n) + "\n";
-    for (const auto& p : vg.points) vec(p.x, p.y, p.z);
+    for (const auto& p : vg.points) {
+      for (int k = 0; k < 3; ++k) {
+        if (k) out += ' ';
+        detail::appendCoordinate(out, p.data[k], offset[k]);
+      }
+      out += '\n';
+    }
     out += "num_colors: 0\n";
     out += "num_normals: " + std::to_string(vg.has_normals ? n : 0) + "\n";
     if (vg.has_normals)
@@ -341,10 +363,13 @@ void saveVertexGroups(const std::string& path, const VertexGroups& vg) {
     for (std::size_t g = 0; g < groups; ++g) {
       const Plane& plane = seg.planes[g];
       out += "group_type: 0\nnum_group_parameters: 4\ngroup_parameters:";
-      for (double v : {plane.normal.x(), plane.normal.y(), plane.normal.z(), plane.offset}) {
+      for (double v : {plane.normal.x(), plane.normal.y(), plane.normal.z()}) {
         out += ' ';
         detail::appendFloat(out, static_cast<float>(v));
       }
+      out += ' ';
+      if (offset.isZero(0.0)) detail::appendFloat(out, static_cast<float>(plane.offset));
+      else detail::appendDouble(out, fileOffset(plane));
       out += "\ngroup_label: " + labelOf(g) + "\ngroup_color: ";
       const Eigen::Vector3f c = colorOf(g);
       vec(c[0], c[1], c[2]);
@@ -357,7 +382,8 @@ void saveVertexGroups(const std::string& path, const VertexGroups& vg) {
     const auto i32 = [&](std::size_t v) { detail::appendBinary(out, static_cast<std::int32_t>(v)); };
     const auto f32 = [&](double v) { detail::appendBinary(out, static_cast<float>(v)); };
     i32(n);
-    for (const auto& p : vg.points) { f32(p.x); f32(p.y); f32(p.z); }
+    for (const auto& p : vg.points)
+      for (int k = 0; k < 3; ++k) f32(detail::unshift(p.data[k], offset[k]));
     i32(0);  // no colours
     i32(vg.has_normals ? n : 0);
     if (vg.has_normals)
@@ -367,7 +393,7 @@ void saveVertexGroups(const std::string& path, const VertexGroups& vg) {
       const Plane& plane = seg.planes[g];
       i32(kPlaneType);
       i32(4);
-      f32(plane.normal.x()); f32(plane.normal.y()); f32(plane.normal.z()); f32(plane.offset);
+      f32(plane.normal.x()); f32(plane.normal.y()); f32(plane.normal.z()); f32(fileOffset(plane));
       const std::string label = labelOf(g);
       i32(label.size());
       out += label;

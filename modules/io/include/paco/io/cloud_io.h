@@ -3,8 +3,12 @@
 //   paco::io::LabelledCloud scan = paco::io::loadCloud("scan.ply");      // format by extension
 //   if (!scan.has_normals) ... estimate them ...
 //   paco::io::saveCloud("labelled.pcd", scan);                           // PCD with a label field
+// A scan in national-grid coordinates (e.g. x 85123.45, y 446012.30) is read with the far part
+// of its coordinates moved to scan.coordinate_offset, so that the float32 points keep their
+// precision; saveCloud adds it back.
 #include <paco/common/primitive.h>
 
+#include <Eigen/Core>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
@@ -24,6 +28,12 @@ struct LabelledCloud {
   /// One packed 0xRRGGBB colour per point, or empty. Written to PCD only (field "rgb", as PCL's
   /// PointXYZRGB); readers leave it empty.
   std::vector<std::uint32_t> colours;
+  /// The file's coordinates are points[i] + coordinate_offset. Readers set it when float32 would
+  /// round the file's coordinates by more than 1e-5 of the cloud's size (coordinates far from 0
+  /// for the cloud's size, as in UTM or national grids): it is then the cloud's centre rounded to
+  /// a tidy number, and points hold small coordinates around it. Writers add it back (in double
+  /// precision where the format allows). Zero for clouds near the origin.
+  Eigen::Vector3d coordinate_offset = Eigen::Vector3d::Zero();
   bool hasLabels() const { return !labels.empty(); }
   bool hasColours() const { return !colours.empty(); }
 };
@@ -37,6 +47,9 @@ enum class NonFinitePolicy {
 
 struct CloudReadOptions {
   NonFinitePolicy non_finite = NonFinitePolicy::Reject;
+  /// Move far coordinates to LabelledCloud::coordinate_offset (see there). false stores the
+  /// file's coordinates in the points as they are, rounded to float32, with a zero offset.
+  bool offset_far_coordinates = true;
 };
 
 enum class PcdEncoding { Ascii, Binary, BinaryCompressed };
@@ -60,8 +73,11 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
 
 /// Writes a cloud by extension (.pcd, .ply, .xyz, .npy, .vg, .bvg). Labels are written when present
 /// (PCD field "label", PLY property "label", .npy column 7 with zero normals when there are none;
-/// .vg/.bvg: one group per label with its fitted plane). Binary formats store float32; text
-/// formats use the shortest text that reads back to the same float (at most 9 digits). Throws paco::IoError on
+/// .vg/.bvg: one group per label with its fitted plane). Positions are written as
+/// points + coordinate_offset. With a zero offset binary formats store float32 and text formats
+/// the shortest text that reads back to the same float (at most 9 digits); with an offset, .pcd,
+/// .ply and .npy store double positions and text formats double-precision text (.bvg stays
+/// float32, the format's only type). Throws paco::IoError on
 /// failure (unwritable path, unknown extension, labels.size() != points.size()).
 void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudWriteOptions& options = {});
 

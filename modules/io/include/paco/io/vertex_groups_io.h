@@ -26,18 +26,23 @@ struct VertexGroups {
   /// Per group: the confidence of a completed primitive (1 for observed segments). Stored in the
   /// group label as "confidence=<value>" so that other readers still open the file.
   std::vector<float> confidences;
+  /// The file's coordinates are points[i] + coordinate_offset, and its planes are the planes
+  /// moved by it; as LabelledCloud::coordinate_offset (zero near the origin).
+  Eigen::Vector3d coordinate_offset = Eigen::Vector3d::Zero();
 };
 
 /// Reads .vg (ascii) or .bvg (binary) by extension. A group whose stored plane is missing or zero
 /// (Easy3D writes zeros) gets the plane fitted to its points; child groups are read and skipped;
 /// a point in two groups is labelled with the first. Throws paco::IoError for a missing, empty,
 /// truncated or malformed file (bad counts, indices out of range, non-finite values, non-plane
-/// groups).
+/// groups). Coordinates far from 0 for the cloud's size are moved to coordinate_offset.
 VertexGroups loadVertexGroups(const std::string& path);
 /// Writes .vg (ascii) or .bvg (binary) by extension, in the layout PolyFit and Easy3D read. Each
 /// group's label is "confidence=<v>" when `confidences` is filled, else its group_labels entry
 /// (blanks become '_'), else "unknown"; colours default to a fixed palette. Point colours and
-/// child groups are not written. Throws paco::IoError for an unwritable path or groups that
+/// child groups are not written. Points and planes are moved back by coordinate_offset: .vg
+/// writes them as double-precision text, .bvg as float32 (the format's only type, so far
+/// coordinates lose precision there). Throws paco::IoError for an unwritable path or groups that
 /// disagree with the points (index out of range, sizes that differ).
 void saveVertexGroups(const std::string& path, const VertexGroups& groups);
 
