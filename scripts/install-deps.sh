@@ -13,6 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libglpk-dev coinor-libcbc-dev coinor-libclp-dev coinor-libcgl-dev coinor-libosi-dev coinor-libcoinutils-dev
   libopenblas0-openmp libopenblas-openmp-dev
+  zlib1g-dev
 )
 
 SUDO=""

@@ -1,9 +1,12 @@
+#include "shapes.h"
 #include "test_network_support.h"
 #include "test_support.h"
 
 #include <paco/common/error.h>
 #include <paco/completion/checkpoint.h>
+#include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model.h>
+#include <paco/encoding/plane_proxy_encoder.h>
 
 #include <gtest/gtest.h>
 
@@ -148,6 +151,81 @@ TEST(Checkpoint, WeightsThatDoNotFitTheirConfigAreAModelError) {
   writeModelFile(dir.file("shallow.pt"), deeper, shallow, 0);
   const auto missing = errorOf([&] { loadCheckpoint(dir.file("shallow.pt")); });
   EXPECT_TRUE(contains(missing, "do not match")) << missing;
+}
+
+// Stages 2-3 on a box segmented by face.
+void completeABox(const CompletionModel::ConstPtr& model) {
+  const SurfaceMesh box = test::makeBox({0, 0, 0}, {2, 1, 1});
+  const SurfaceSample sample = sampleSurface(box, 1024, 3);
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
+  PlanarSegmentation segmentation;
+  for (std::size_t f = 0; f < box.faces.size(); ++f)
+    segmentation.planes.push_back(Plane::fromPointAndNormal(box.vertices[box.faces[f][0]], faceNormal(box, f)));
+  for (std::size_t i = 0; i < sample.points.size(); ++i) {
+    pcl::PointNormal p;
+    p.getVector3fMap() = sample.points[i].cast<float>();
+    p.getNormalVector3fMap() = sample.normals[i].cast<float>();
+    cloud->push_back(p);
+    segmentation.labels.push_back(static_cast<int>(sample.faces[i]));
+  }
+  segmentation.rebuildSegmentsFromLabels();
+  PlaneProxyEncoder encoder;
+  encoder.setModel(model);
+  encoder.setInputCloud(cloud);
+  encoder.setSegmentation(segmentation);
+  PlaneProxies proxies;
+  encoder.encode(proxies);
+  ParametricCompleter completer;
+  completer.setModel(model);
+  completer.setInputProxies(proxies);
+  std::vector<PlanarPrimitive> primitives;
+  completer.complete(primitives);
+}
+
+// One byte changed inside a weight tensor leaves a valid archive that LibTorch reads without
+// complaint; the stored checksums must catch it, for the network, the encoder and the decoder.
+TEST(Checkpoint, ADamagedWeightTensorIsAModelError) {
+  test::TempDir dir;
+  PacoNetwork net(tinyModelConfig());
+  torch::NoGradGuard no_grad;
+  std::string encoder_tensor, decoder_tensor;
+  for (const auto& item : net->named_parameters()) {
+    std::string& name = item.key().rfind("encoder.", 0) == 0 ? encoder_tensor : decoder_tensor;
+    if (name.empty() && item.value().numel() >= 4) name = item.key();
+  }
+  ASSERT_FALSE(encoder_tensor.empty());
+  ASSERT_FALSE(decoder_tensor.empty());
+  for (const auto& [name, value] : {std::pair<std::string, float>{encoder_tensor, 1234.5f}, {decoder_tensor, -4321.25f}}) {
+    SCOPED_TRACE(name);
+    PacoNetwork copy(tinyModelConfig());
+    copy->named_parameters()[name].fill_(value);
+    saveCheckpoint(dir.file("model.pt"), copy);
+    std::string bytes = test::readBytes(dir.file("model.pt"));
+    // The tensor's bytes: four copies of `value` in a row, found in the stored record.
+    std::string pattern;
+    for (int i = 0; i < 4; ++i) pattern.append(reinterpret_cast<const char*>(&value), sizeof value);
+    const std::size_t at = bytes.find(pattern);
+    ASSERT_NE(at, std::string::npos);
+    bytes[at + 5] = static_cast<char>(bytes[at + 5] ^ 0x10);  // 1234.5 -> another finite number
+    test::writeBytes(dir.file("damaged.pt"), bytes);
+
+    const std::string whole = errorOf([&] { loadCheckpoint(dir.file("damaged.pt")); });
+    EXPECT_TRUE(contains(whole, "does not match the checksum stored with it")) << whole;
+    EXPECT_TRUE(contains(whole, "damaged.pt")) << whole;
+    const bool in_encoder = name == encoder_tensor;
+    const std::string stage = errorOf([&] {
+      const auto model = CompletionModel::load(dir.file("damaged.pt"));
+      if (!in_encoder) completeABox(model);  // the decoder's weights are read when the completer first runs
+    });
+    EXPECT_TRUE(contains(stage, std::string(in_encoder ? "the encoder tensor '" : "the decoder tensor '") +
+                                    name.substr(8) + "' does not match the checksum"))
+        << stage;
+  }
+  // A file written without checksums (as before they existed) still loads.
+  torch::serialize::OutputArchive model;
+  net->save(model);
+  writeModelFile(dir.file("unchecked.pt"), tinyModelConfig(), model, parameterCount(*net));
+  EXPECT_EQ(errorOf([&] { loadCheckpoint(dir.file("unchecked.pt")); }), "NO ERROR");
 }
 
 TEST(Checkpoint, UnwritableFolderIsAnIoError) {

@@ -7,7 +7,7 @@ void saveCheckpoint(const std::string& path, PacoNetwork& network,
                     torch::serialize::OutputArchive* training_state) {
   torch::serialize::OutputArchive model;
   network->save(model);
-  writeModelFile(path, network->config(), model, parameterCount(*network), training_state);
+  writeModelFile(path, network->config(), model, parameterCount(*network), training_state, weightChecksums(*network));
 }
 
 LoadedCheckpoint loadCheckpoint(const std::string& path, const std::optional<ModelConfig>& expected) {
@@ -23,7 +23,7 @@ LoadedCheckpoint loadCheckpoint(const std::string& path, const std::optional<Mod
   checkpoint.config = file.config;
   checkpoint.format_version = file.format_version;
   checkpoint.network = PacoNetwork(file.config);
-  loadModuleWeights(*checkpoint.network, *file.model, path, "network");
+  loadModuleWeights(*checkpoint.network, *file.model, file, "", "network");
   checkpoint.network->eval();
   checkpoint.training_state = file.training_state;
   return checkpoint;

@@ -22,7 +22,7 @@ CompletionDecoder decoderOf(CompletionModel::Impl& impl) {
                        e.what_without_backtrace() + "): download or train it again");
     }
     CompletionDecoder decoder(impl.file.config);
-    loadModuleWeights(*decoder, archive, impl.file.path, "decoder");
+    loadModuleWeights(*decoder, archive, impl.file, "decoder.", "decoder");
     decoder->eval();
     impl.decoder = decoder.ptr();
   }

@@ -53,7 +53,7 @@ CompletionModel::ConstPtr CompletionModel::load(const std::string& path) {
                      "): download or train it again");
   }
   impl->encoder = PlaneProxyNetwork(impl->file.config);
-  loadModuleWeights(*impl->encoder, encoder_archive, path, "encoder");
+  loadModuleWeights(*impl->encoder, encoder_archive, impl->file, "encoder.", "encoder");
   impl->encoder->eval();
   return std::make_shared<const CompletionModel>(std::move(impl));
 }

@@ -1,8 +1,13 @@
 #include <paco/common/error.h>
 #include <paco/encoding/model_file.h>
 
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <map>
+#include <sstream>
 #include <unistd.h>
 
 namespace paco {
@@ -18,7 +23,51 @@ std::string firstLine(const c10::Error& e) {
   return message;
 }
 
+std::uint32_t crc32Of(const torch::Tensor& tensor) {
+  const torch::Tensor bytes = tensor.detach().to(torch::kCPU).contiguous();
+  // zlib's crc32 takes at most 4 GiB per call; a weight tensor is far smaller, but go in pieces.
+  const auto* data = static_cast<const Bytef*>(bytes.data_ptr());
+  uLong crc = crc32(0L, Z_NULL, 0);
+  for (std::size_t done = 0, total = bytes.nbytes(); done < total;) {
+    const auto piece = static_cast<uInt>(std::min<std::size_t>(total - done, 1u << 30));
+    crc = crc32(crc, data + done, piece);
+    done += piece;
+  }
+  return static_cast<std::uint32_t>(crc);
+}
+
+std::string checksumsText(const WeightChecksums& checksums) {
+  std::string text;
+  char hex[16];
+  for (const auto& [name, crc] : checksums) {
+    std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(crc));
+    text += name + " " + hex + "\n";
+  }
+  return text;
+}
+
+/// Parses checksumsText; false when a line is not "<name> <8 hex digits>".
+bool parseChecksums(const std::string& text, WeightChecksums& checksums) {
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    const auto blank = line.rfind(' ');
+    if (blank == std::string::npos || blank == 0 || line.size() - blank - 1 != 8) return false;
+    const std::string hex = line.substr(blank + 1);
+    if (hex.find_first_not_of("0123456789abcdef") != std::string::npos) return false;
+    checksums[line.substr(0, blank)] = static_cast<std::uint32_t>(std::stoul(hex, nullptr, 16));
+  }
+  return true;
+}
+
 }  // namespace
+
+WeightChecksums weightChecksums(const torch::nn::Module& module) {
+  WeightChecksums checksums;
+  for (const auto& item : module.named_parameters()) checksums[item.key()] = crc32Of(item.value());
+  for (const auto& item : module.named_buffers()) checksums[item.key()] = crc32Of(item.value());
+  return checksums;
+}
 
 ModelFile readModelFile(const std::string& path) {
   namespace fs = std::filesystem;
@@ -64,6 +113,10 @@ ModelFile readModelFile(const std::string& path) {
   }
   if (archive.try_read("parameter_count", value) && value.isInt())
     file.parameter_count = value.toInt();
+  if (archive.try_read("weight_checksums", value) &&
+      (!value.isString() || !parseChecksums(value.toStringRef(), file.weight_checksums)))
+    throw ModelError("model file " + quoted(path) +
+                     " has a malformed list of weight checksums: the file is damaged; copy or train it again");
   file.model = std::make_shared<torch::serialize::InputArchive>();
   try {
     if (!archive.try_read("model", *file.model))
@@ -80,12 +133,13 @@ ModelFile readModelFile(const std::string& path) {
 
 void writeModelFile(const std::string& path, const ModelConfig& config,
                     torch::serialize::OutputArchive& model, std::int64_t parameter_count,
-                    torch::serialize::OutputArchive* training_state) {
+                    torch::serialize::OutputArchive* training_state, const WeightChecksums& checksums) {
   config.validate();
   torch::serialize::OutputArchive root;
   root.write("format_version", c10::IValue(static_cast<int64_t>(kModelFormatVersion)));
   root.write("config", c10::IValue(config.toJson()));
   root.write("parameter_count", c10::IValue(static_cast<int64_t>(parameter_count)));
+  if (!checksums.empty()) root.write("weight_checksums", c10::IValue(checksumsText(checksums)));
   root.write("model", model);
   if (training_state) root.write("training_state", *training_state);
   // Write beside the target and rename, so a crash or Ctrl-C never leaves a truncated model.
@@ -106,8 +160,9 @@ void writeModelFile(const std::string& path, const ModelConfig& config,
   }
 }
 
-void loadModuleWeights(torch::nn::Module& module, torch::serialize::InputArchive& archive,
-                       const std::string& path, const std::string& what) {
+void loadModuleWeights(torch::nn::Module& module, torch::serialize::InputArchive& archive, const ModelFile& file,
+                       const std::string& name_prefix, const std::string& what) {
+  const std::string& path = file.path;
   // InputArchive replaces tensors whatever their shape, so the shapes are checked here.
   std::map<std::string, std::vector<int64_t>> expected;
   for (const auto& item : module.named_parameters()) expected[item.key()] = item.value().sizes().vec();
@@ -130,6 +185,17 @@ void loadModuleWeights(torch::nn::Module& module, torch::serialize::InputArchive
   };
   for (const auto& item : module.named_parameters()) check(item.key(), item.value());
   for (const auto& item : module.named_buffers()) check(item.key(), item.value());
+  if (file.weight_checksums.empty()) return;
+  for (const auto& [name, crc] : weightChecksums(module)) {
+    const auto stored = file.weight_checksums.find(name_prefix + name);
+    if (stored == file.weight_checksums.end())
+      throw ModelError("model file " + quoted(path) + " stores no checksum for the " + what + " tensor '" + name +
+                       "': the file is damaged or was edited; copy or train it again");
+    if (stored->second != crc)
+      throw ModelError("model file " + quoted(path) + ": the " + what + " tensor '" + name +
+                       "' does not match the checksum stored with it: the file was damaged after it was "
+                       "written (disk, copy or download); copy or train it again");
+  }
 }
 
 }  // namespace paco
