@@ -48,6 +48,7 @@ struct Options {
   bool use_labels = false;
   bool drop_non_finite = false;
   std::size_t max_points = paco::kDefaultScanPointBudget;
+  bool keep_stray_points = false;
 };
 
 void printHelp(const po::options_description& visible) {
@@ -82,6 +83,7 @@ int run(int argc, char** argv) {
       ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch threads (0: one per hardware thread)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
   paco::app::addMaxPointsOption(visible, o.max_points);
+  paco::app::addKeepStrayPointsOption(visible, o.keep_stray_points);
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
@@ -161,7 +163,7 @@ int run(int argc, char** argv) {
   const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // Labels name input points, so a labelled input is used as it is.
   const auto cloud = o.use_labels ? std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points)
-                                  : paco::app::workingCloud(scan.points, o.max_points, timer);
+                                  : paco::app::workingCloud(scan.points, o.max_points, o.keep_stray_points, timer);
 
   paco::PlanarSegmentation segmentation;
   timer.start("segment");

@@ -52,6 +52,7 @@ struct Options {
   bool no_warm_start = false;
   bool drop_non_finite = false;
   std::size_t max_points = paco::kDefaultScanPointBudget;
+  bool keep_stray_points = false;
   int threads = 0;
 };
 
@@ -96,6 +97,7 @@ int run(int argc, char** argv) {
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
   paco::app::addMaxPointsOption(visible, o.max_points);
+  paco::app::addKeepStrayPointsOption(visible, o.keep_stray_points);
   paco::app::addMinPointsOption(visible, o.min_points);
   paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
   paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
@@ -172,7 +174,7 @@ int run(int argc, char** argv) {
   paco::app::reportCoordinateOffset(scan.coordinate_offset);
   const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // A file without normals reads as zero normals, which the segmenter estimates.
-  const auto cloud = paco::app::workingCloud(scan.points, o.max_points, timer);
+  const auto cloud = paco::app::workingCloud(scan.points, o.max_points, o.keep_stray_points, timer);
 
   timer.start("segment");
   paco::PlanarSegmentation segmentation;

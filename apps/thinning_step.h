@@ -49,17 +49,29 @@ inline void validateMaxPoints(std::size_t max_points) {
     throw UsageError("--max-points must be 0 (keep all) or at least " + std::to_string(kMinPointBudget));
 }
 
-/// The cloud the pipeline works on (paco::prepareScanPoints: repeated points left out, then
-/// thinned to `max_points`), with a line for each step that changed anything.
+/// --keep-stray-points of the tools that prepare a scan (paco::findStrayPoints).
+inline void addKeepStrayPointsOption(boost::program_options::options_description& options, bool& keep) {
+  options.add_options()("keep-stray-points", boost::program_options::bool_switch(&keep),
+                        "keep small groups of points far from the rest of the scan (at most 0.5 % of the points, "
+                        "farther from the rest than the object is wide), which are left out by default");
+}
+
+/// The cloud the pipeline works on (paco::prepareScanPoints: repeated points and, unless
+/// `keep_strays`, stray points left out, then thinned to `max_points`), with a line for each
+/// step that changed anything.
 inline std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> workingCloud(const pcl::PointCloud<pcl::PointNormal>& scan,
-                                                                        std::size_t max_points, StageTimer& timer) {
+                                                                        std::size_t max_points, bool keep_strays,
+                                                                        StageTimer& timer) {
   auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
   timer.start("prepare");
-  const ScanPreparationReport report = prepareScanPoints(scan, max_points, *cloud);
+  const ScanPreparationReport report = prepareScanPoints(scan, max_points, *cloud, !keep_strays);
   timer.stop();
   if (report.repeats_removed > 0)
     std::printf("left out %zu of %zu points that repeat another point's coordinates\n", report.repeats_removed,
                 scan.size());
+  if (report.strays_removed > 0)
+    std::printf("left out %zu stray %s far from the rest of the scan (--keep-stray-points keeps them)\n",
+                report.strays_removed, report.strays_removed == 1 ? "point" : "points");
   if (report.thinning.thinned())
     std::printf("thin: %zu of %zu points kept, one per %.3g-unit voxel (--max-points %zu)\n",
                 report.thinning.output_points, report.thinning.input_points, report.thinning.voxel_size, max_points);

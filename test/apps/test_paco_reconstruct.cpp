@@ -30,7 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 using paco::test::TempDir;
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using paco::test::quoted;
 std::string samplePath() { return std::string(PACO_SOURCE_DIR) + "/data/sample_partial.pcd"; }
 std::string tool() { return quoted(paco::test::toolPath("paco_reconstruct")); }
 
@@ -96,6 +96,32 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
   const auto coloured = paco::io::loadCloud(dir.file("part_primitives.pcd"));
   EXPECT_EQ(coloured.points.size(), groups.points.size());
   EXPECT_EQ(filesIn(dir.path()), 4u);  // input + mesh + .vg + .pcd, nothing partial
+}
+
+// One stray return 25 diagonals away is left out, so the mesh stays the part's size.
+TEST(PacoReconstruct, LeavesOutAStrayPointFarFromTheScan) {
+  TempDir dir;
+  paco::io::LabelledCloud cloud = paco::io::loadCloud(samplePath());
+  Eigen::AlignedBox3d seen;
+  for (const auto& p : cloud.points) seen.extend(p.getVector3fMap().cast<double>());
+  pcl::PointNormal stray = cloud.points[0];
+  stray.getVector3fMap() = (seen.max() + 25.0 * seen.diagonal()).cast<float>();
+  cloud.points.push_back(stray);
+  paco::io::saveCloud(dir.file("scan.pcd"), cloud);
+  const std::string base = tool() + " " + quoted(dir.file("scan.pcd")) + " --no-completion --assembler cell-complex -o ";
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("part.obj")), &log), 0) << log;
+  EXPECT_NE(log.find("left out 1 stray point far from the rest of the scan"), std::string::npos) << log;
+  // The part's 15 planes are found, as without the stray point.
+  EXPECT_NE(log.find(": 15 planes, coverage"), std::string::npos) << log;
+  Eigen::Vector3d lo, hi;
+  paco::boundingBox(paco::io::loadMesh(dir.file("part.obj")), lo, hi);
+  EXPECT_LT((hi - lo).norm(), 1.5 * seen.diagonal().norm());
+  // Kept, the stray point stretches the scan's box 25 times, and the segmenter, working in
+  // fractions of that box, merges the part's faces.
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("kept.obj")) + " --keep-stray-points", &log), 0) << log;
+  EXPECT_EQ(log.find("stray point"), std::string::npos) << log;
+  EXPECT_EQ(log.find(": 15 planes, coverage"), std::string::npos) << log;
 }
 
 // A scan denser than --max-points is thinned before segmentation, and the tool says so.

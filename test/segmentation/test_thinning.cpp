@@ -144,6 +144,45 @@ TEST(RepeatedPoints, EachRepeatNamesTheFirstPointAtItsPosition) {
   EXPECT_THROW(removeRepeatedPoints(cloud, cloud), InvalidInputError);
 }
 
+// A unit box scanned with 2,000 points, and points added around it.
+pcl::PointCloud<pcl::PointNormal> boxWith(const std::vector<Eigen::Vector3f>& extra) {
+  pcl::PointCloud<pcl::PointNormal> cloud = *test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 2000, 4).cloud;
+  for (const auto& xyz : extra) {
+    pcl::PointNormal p;
+    p.getVector3fMap() = xyz;
+    p.getNormalVector3fMap() = Eigen::Vector3f::UnitZ();
+    cloud.push_back(p);
+  }
+  return cloud;
+}
+
+TEST(StrayPoints, APointFarFromTheScanIsStray) {
+  // The box's diagonal is 1.73: a point 38 units away, and a group of 3 points 5 units away.
+  const pcl::PointCloud<pcl::PointNormal> cloud =
+      boxWith({{38, 38, 38}, {6, 0.5, 0.5}, {6.02, 0.5, 0.5}, {6, 0.52, 0.5}});
+  EXPECT_EQ(findStrayPoints(cloud), (std::vector<int>{2000, 2001, 2002, 2003}));
+  pcl::PointCloud<pcl::PointNormal> working;
+  const ScanPreparationReport report = prepareScanPoints(cloud, 0, working);
+  EXPECT_EQ(report.strays_removed, 4u);
+  EXPECT_EQ(working.size(), 2000u);
+  EXPECT_TRUE(report.changed());
+  EXPECT_EQ(prepareScanPoints(cloud, 0, working, /*remove_strays=*/false).strays_removed, 0u);
+  EXPECT_EQ(working.size(), 2004u);
+}
+
+TEST(StrayPoints, PointsNearerThanTheScanIsWideOrManyOfThemAreKept) {
+  // 1.5 units from the box (less than its 1.73 diagonal): kept, like ground returns below a roof.
+  EXPECT_TRUE(findStrayPoints(boxWith({{2.5, 0.5, 0.5}})).empty());
+  // 20 points (1 % of the scan) 5 units away: a second piece of the object, not stray.
+  std::vector<Eigen::Vector3f> piece;
+  for (int i = 0; i < 20; ++i) piece.emplace_back(6.0f + 0.01f * static_cast<float>(i), 0.5f, 0.5f);
+  EXPECT_TRUE(findStrayPoints(boxWith(piece)).empty());
+  // No stray in the box alone; non-finite points are never stray.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_TRUE(findStrayPoints(boxWith({{nan, 0, 0}})).empty());
+  EXPECT_EQ(findStrayPoints(boxWith({{nan, 0, 0}, {40, 0, 0}})), (std::vector<int>{2001}));
+}
+
 TEST(Thinning, BadInputIsAClearError) {
   const LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 1000, 3);
   pcl::PointCloud<pcl::PointNormal> out;

@@ -59,19 +59,36 @@ std::vector<int> findRepeatedPoints(const pcl::PointCloud<PointT>& cloud);
 template <typename PointT>
 std::size_t removeRepeatedPoints(const pcl::PointCloud<PointT>& input, pcl::PointCloud<PointT>& output);
 
+/// Indices (ascending) of the stray points of a scan: small groups of points far from the rest,
+/// such as a stray return metres away from a scanned part. Points are grouped when a chain of
+/// points less than 5 % of the bounding-box diagonal apart joins them (pcl::EuclideanClusterExtraction
+/// on a voxel grid, which may merge groups up to 2.7 times that apart but never splits one); a
+/// group is stray when it holds at most 0.5 % of the points (at least 1) and every other point
+/// lies farther from it than the bounding-box diagonal of the largest group.
+///
+/// Why: the pipeline closes a mesh around everything it is given, so one stray point 40 times
+/// the part's size away turns the part into a 40-unit tetrahedron; it also stretches the box
+/// the scan is normalised by. A real piece of the object (a few points of a sparsely scanned
+/// wall, ground returns below a roof edge) lies nearer the rest than its width, or holds more
+/// points. Non-finite points are never stray.
+/// Instantiated for pcl::PointXYZ and pcl::PointNormal.
+template <typename PointT>
+std::vector<int> findStrayPoints(const pcl::PointCloud<PointT>& cloud);
+
 /// What prepareScanPoints did.
 struct ScanPreparationReport {
   std::size_t repeats_removed = 0;  ///< points left out as repeats
-  ThinningReport thinning;          ///< of the points left after the repeats
-  bool changed() const { return repeats_removed > 0 || thinning.thinned(); }
+  std::size_t strays_removed = 0;   ///< points left out as stray (findStrayPoints)
+  ThinningReport thinning;          ///< of the points left after the repeats and strays
+  bool changed() const { return repeats_removed > 0 || strays_removed > 0 || thinning.thinned(); }
 };
 
 /// A scan as the pipeline works on it (paco_reconstruct, paco_complete, paco_eval): `input`
-/// without its repeated points (removeRepeatedPoints), then thinned to `max_points`
-/// (thinToPointBudget) when more remain; 0 keeps them all. `input` and `output` may not be the
-/// same object.
+/// without its repeated points (removeRepeatedPoints) and, when `remove_strays`, its stray
+/// points (findStrayPoints), then thinned to `max_points` (thinToPointBudget) when more remain;
+/// 0 keeps them all. `input` and `output` may not be the same object.
 template <typename PointT>
 ScanPreparationReport prepareScanPoints(const pcl::PointCloud<PointT>& input, std::size_t max_points,
-                                        pcl::PointCloud<PointT>& output);
+                                        pcl::PointCloud<PointT>& output, bool remove_strays = true);
 
 }  // namespace paco
