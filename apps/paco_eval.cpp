@@ -190,6 +190,15 @@ int dataset(const Options& o) {
   b.assemblers = splitList(o.assemblers);
   b.levels = intList(o.levels, "levels");
   b.views = intList(o.views, "views");
+  for (int level : b.levels)
+    if (level < 0 || level > 2)
+      throw paco::app::UsageError("--levels takes missing levels 0 (25 %), 1 (50 %) and 2 (75 %), got " +
+                                  std::to_string(level));
+  for (int view : b.views)
+    if (view < 0) throw paco::app::UsageError("--views takes view indices >= 0, got " + std::to_string(view));
+  if (o.segment_min_points != 0 && o.segment_min_points < 3)
+    throw paco::app::UsageError("--min-points must be 0 (1.5 % of the input's points) or at least 3, got " +
+                                std::to_string(o.segment_min_points));
   b.limit = o.limit;
   paco::app::validateThreads("--jobs", o.jobs);
   paco::app::validateThreads("--threads", o.threads, "one per hardware thread");

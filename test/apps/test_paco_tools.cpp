@@ -30,7 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 using paco::test::TempDir;
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using paco::test::quoted;
 std::string tool(const std::string& name) { return quoted(paco::test::toolPath(name)); }
 
 // Whether this build has the tool (the tools of missing modules are not built).

@@ -16,7 +16,7 @@ namespace {
 
 using paco::test::TempDir;
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using paco::test::quoted;
 std::string tool() { return paco::test::toolPath("paco_assemble"); }
 bool toolBuilt() { return std::filesystem::exists(tool()); }
 

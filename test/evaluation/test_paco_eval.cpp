@@ -7,11 +7,14 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace {
 
 bool toolBuilt() { return std::filesystem::exists(paco::test::toolPath("paco_eval")); }
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using paco::test::quoted;
 
 }  // namespace
 
@@ -110,6 +113,19 @@ TEST(PacoEvalTool, SingleModeRejectsBadInput) {
             2)
       << out;
   EXPECT_NE(out.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << out;
+  // Levels, views and the segmenter's smallest plane, in the tool's own words.
+  for (const auto& [options, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --levels 0,3", "--levels takes missing levels 0 (25 %), 1 (50 %) and 2 (75 %), got 3"},
+           {" --views -1", "--views takes view indices >= 0, got -1"},
+           {" --min-points 2", "--min-points must be 0 (1.5 % of the input's points) or at least 3, got 2"}}) {
+    EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --dataset " + quoted(dir.file("none")) +
+                                         " -o " + quoted(dir.file("out")) + options,
+                                     &out),
+              2)
+        << options << "\n" << out;
+    EXPECT_NE(out.find(message), std::string::npos) << out;
+    EXPECT_EQ(out.find("runBenchmark"), std::string::npos) << out;
+  }
   // PolyFit weights that are negative, or all 0.
   for (const std::string weights : {" --coverage=-0.1", " --fitting 0 --coverage 0 --complexity 0"}) {
     EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --dataset " + quoted(dir.file("none")) +

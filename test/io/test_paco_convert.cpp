@@ -13,7 +13,7 @@ namespace {
 
 using paco::test::TempDir;
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using paco::test::quoted;
 
 bool toolBuilt() { return std::filesystem::exists(paco::test::toolPath("paco_convert")); }
 

@@ -19,7 +19,7 @@
 namespace paco {
 namespace {
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using paco::test::quoted;
 
 void writeBoxCloud(const std::string& path, bool with_normals) {
   const auto box = test::sampleShape(test::makeBox({0, 0, 0}, {2.0, 1.5, 1.0}), 3000, 21);

@@ -36,4 +36,7 @@ std::string toolPath(const std::string& name);
 /// Runs a shell command, returns its exit status, and captures stdout+stderr into `output`.
 int runCommand(const std::string& command, std::string* output = nullptr);
 
+/// `s` in single quotes, for a path in a runCommand command line (test paths hold no quote).
+inline std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
 }  // namespace paco::test
