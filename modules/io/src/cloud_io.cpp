@@ -280,7 +280,8 @@ void applyNonFinitePolicy(const std::string& path, LabelledCloud& cloud, NonFini
                    " have non-finite (NaN/Inf) coordinates, the first is point " + std::to_string(first_bad) +
                    " (" + detail::numberText(detail::unshift(p.x, cloud.coordinate_offset.x())) + ", " +
                    detail::numberText(detail::unshift(p.y, cloud.coordinate_offset.y())) + ", " +
-                   detail::numberText(detail::unshift(p.z, cloud.coordinate_offset.z())) + "); drop them with NonFinitePolicy::Drop (the tools' --drop-non-finite)");
+                   detail::numberText(detail::unshift(p.z, cloud.coordinate_offset.z())) +
+                   "); drop them with NonFinitePolicy::Drop (the tools' --drop-non-finite)");
   }
   std::size_t kept = 0;
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
@@ -333,7 +334,8 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
     fail(path, "unknown point cloud extension '" + ext + "'; use .pcd, .ply, .xyz, .npy, .vg or .bvg");
   }
   if (!options.offset_far_coordinates && !cloud.coordinate_offset.isZero(0.0)) {
-    for (auto& p : cloud.points) p.getVector3fMap() = (p.getVector3fMap().cast<double>() + cloud.coordinate_offset).cast<float>();
+    for (auto& p : cloud.points)
+      p.getVector3fMap() = (p.getVector3fMap().cast<double>() + cloud.coordinate_offset).cast<float>();
     cloud.coordinate_offset.setZero();
   }
   applyNonFinitePolicy(path, cloud, options.non_finite);
