@@ -154,6 +154,15 @@ void reportCoordinateOffset(const Eigen::Vector3d& offset) {
               offset.x(), offset.y(), offset.z());
 }
 
+void warnIfPcdRoundsFarCoordinates(const std::string& path, const Eigen::Vector3d& offset) {
+  if (offset.isZero(0.0) || io::extensionOf(path) != ".pcd") return;
+  // float32 rounds to within 2^-24 of a value; the offset is about the largest coordinate.
+  std::fprintf(stderr,
+               "warning: '%s' stores float32 positions (the type PCL reads), which round coordinates this far "
+               "from 0 by up to %.2g; write .ply, .xyz or .npy to keep full precision\n",
+               path.c_str(), offset.cwiseAbs().maxCoeff() * 0x1p-24);
+}
+
 void moveToFileCoordinates(SurfaceMesh& mesh, const Eigen::Vector3d& offset) {
   for (Eigen::Vector3d& v : mesh.vertices) v += offset;
 }

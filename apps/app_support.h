@@ -71,6 +71,9 @@ PlanarSegmentation segmentationFromLabels(const io::LabelledCloud& cloud, const 
 /// (io::LabelledCloud::coordinate_offset) is, and that outputs go back to the file's
 /// coordinates; nothing for a zero offset.
 void reportCoordinateOffset(const Eigen::Vector3d& offset);
+/// Warns on stderr when `path` is a .pcd written from a cloud with a non-zero coordinate offset:
+/// PCD stores float32 positions (for PCL's point types), which round far coordinates.
+void warnIfPcdRoundsFarCoordinates(const std::string& path, const Eigen::Vector3d& offset);
 /// Moves a mesh made in the working frame of a cloud read with `offset` back to the file's
 /// coordinates (SurfaceMesh stores doubles, so nothing is lost).
 void moveToFileCoordinates(SurfaceMesh& mesh, const Eigen::Vector3d& offset);

@@ -95,6 +95,7 @@ int convertCloud(const Options& o, paco::app::StageTimer& timer) {
     printNormalization(norm);
   }
   timer.start("save");
+  paco::app::warnIfPcdRoundsFarCoordinates(o.output, cloud.coordinate_offset);
   paco::app::PendingOutput output(o.output);
   paco::io::saveCloud(output.writePath(), cloud, write);
   output.commit();

@@ -221,6 +221,7 @@ int run(int argc, char** argv) {
   cloud.labels = result.labels;
 
   timer.start("save");
+  paco::app::warnIfPcdRoundsFarCoordinates(o.output, cloud.coordinate_offset);
   paco::io::saveCloud(labelled_output.writePath(), cloud);
   if (vg_output) {
     paco::io::VertexGroups groups;

@@ -92,3 +92,19 @@ TEST(PacoConvert, BadInputFailsWithMessageAndLeavesNoOutput) {
 }
 
 }  // namespace
+
+// UTM coordinates go to PLY in double precision, and to PCD (float32, for PCL) with a warning.
+TEST(PacoConvert, FarCoordinatesKeepTheirPrecisionOrGetAWarning) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_convert is not built";
+  paco::test::TempDir dir;
+  paco::test::writeBytes(dir.file("utm.xyz"), "500000.12 5412345.81 100.5\n500003.12 5412348.48 106.5\n"
+                                              "500012.12 5412353.81 103.5\n");
+  std::string log;
+  const std::string convert = paco::test::toolPath("paco_convert") + " " + quoted(dir.file("utm.xyz")) + " ";
+  ASSERT_EQ(paco::test::runCommand(convert + quoted(dir.file("utm.ply")), &log), 0) << log;
+  EXPECT_EQ(log.find("warning"), std::string::npos) << log;
+  const paco::io::LabelledCloud ply = paco::io::loadCloud(dir.file("utm.ply"));
+  EXPECT_NEAR(ply.points[1].y + ply.coordinate_offset.y(), 5412348.48, 1e-5);
+  ASSERT_EQ(paco::test::runCommand(convert + quoted(dir.file("utm.pcd")), &log), 0) << log;
+  EXPECT_NE(log.find("warning: '" + dir.file("utm.pcd") + "' stores float32 positions"), std::string::npos) << log;
+}

@@ -104,3 +104,25 @@ TEST(PclInteropColours, PclReadsOurRgbField) {
   cloud.colours.pop_back();
   EXPECT_THROW(paco::io::saveCloud(dir.file("bad.pcd"), cloud), paco::IoError);
 }
+
+// A cloud read with a coordinate offset (UTM coordinates) writes a PCD that PCL's float point
+// types read in the file's coordinates, to float32's precision (0.5 at northing 5.4e6).
+TEST(PclInteropFarCoordinates, PclReadsOurPcdInTheFilesCoordinates) {
+  TempDir dir;
+  paco::test::writeBytes(dir.file("utm.xyz"), "500000.12 5412345.81 100.5\n500003.12 5412348.48 106.5\n"
+                                              "500012.12 5412353.81 103.5\n");
+  const paco::io::LabelledCloud cloud = paco::io::loadCloud(dir.file("utm.xyz"));
+  ASSERT_FALSE(cloud.coordinate_offset.isZero(0.0));
+  for (const auto encoding : {paco::io::PcdEncoding::Ascii, paco::io::PcdEncoding::Binary,
+                              paco::io::PcdEncoding::BinaryCompressed}) {
+    paco::io::CloudWriteOptions options;
+    options.pcd_encoding = encoding;
+    paco::io::saveCloud(dir.file("utm.pcd"), cloud, options);
+    pcl::PointCloud<pcl::PointXYZ> read;
+    ASSERT_EQ(pcl::io::loadPCDFile(dir.file("utm.pcd"), read), 0);
+    ASSERT_EQ(read.size(), 3u);
+    EXPECT_NEAR(read[1].x, 500003.12, 0.25);
+    EXPECT_NEAR(read[1].y, 5412348.48, 0.25);
+    EXPECT_NEAR(read[1].z, 106.5, 1e-5);
+  }
+}

@@ -259,11 +259,8 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
   if (labels) out += " label";
   const std::size_t nfloat = cloud.has_normals ? 6 : 3;
   const std::size_t nf = nfloat + (colours ? 1 : 0) + (labels ? 1 : 0);
-  // With a coordinate offset, x y z are written as doubles ("F 8") holding points + offset.
-  const Eigen::Vector3d& offset = cloud.coordinate_offset;
-  const bool offset_positions = !offset.isZero(0.0);
   out += "\nSIZE";
-  for (std::size_t i = 0; i < nf; ++i) out += (offset_positions && i < 3) ? " 8" : " 4";
+  for (std::size_t i = 0; i < nf; ++i) out += " 4";
   out += "\nTYPE";
   // Colours are "rgb F 4" holding the packed 0xRRGGBB bits, as PCL's PointXYZRGB writes them.
   // Labels are "U 4" like PCL's PointXYZL (pcl::fromPCLPointCloud2 matches the type too); -1 is
@@ -272,9 +269,12 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
   out += "\nCOUNT";
   for (std::size_t i = 0; i < nf; ++i) out += " 1";
   out += "\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA ";
+  // Positions are float32 points + coordinate_offset, the type PCL's point types and pcl_viewer
+  // read ("F 8" fields load as zeros into pcl::PointXYZ): far coordinates lose precision here.
+  const Eigen::Vector3d& offset = cloud.coordinate_offset;
   const auto floats = [&](std::size_t i, float v[6]) {
     const pcl::PointNormal& p = cloud.points[i];
-    v[0] = p.x; v[1] = p.y; v[2] = p.z;
+    for (int k = 0; k < 3; ++k) v[k] = static_cast<float>(unshift(p.data[k], offset[k]));
     v[3] = p.normal_x; v[4] = p.normal_y; v[5] = p.normal_z;
   };
   float v[6];
@@ -284,7 +284,7 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
       floats(i, v);
       for (std::size_t k = 0; k < nfloat; ++k) {
         if (k) out += ' ';
-        appendCoordinate(out, v[k], k < 3 ? offset[static_cast<Eigen::Index>(k)] : 0.0);
+        appendFloat(out, v[k]);
       }
       if (colours) {
         // PCL's ascii rgb is the float whose bits are the packed colour.
@@ -298,25 +298,21 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
     }
   } else if (encoding == PcdEncoding::Binary) {
     out += "binary\n";
-    out.reserve(out.size() + n * nf * 8);
+    out.reserve(out.size() + n * nf * 4);
     for (std::size_t i = 0; i < n; ++i) {
       floats(i, v);
-      for (std::size_t k = 0; k < nfloat; ++k) {
-        if (offset_positions && k < 3) appendBinary(out, unshift(v[k], offset[static_cast<Eigen::Index>(k)]));
-        else appendBinary(out, v[k]);
-      }
+      for (std::size_t k = 0; k < nfloat; ++k) appendBinary(out, v[k]);
       if (colours) appendBinary(out, cloud.colours[i]);
       if (labels) appendBinary(out, static_cast<std::uint32_t>(cloud.labels[i]));
     }
   } else {
     out += "binary_compressed\n";
     std::string soa;
-    soa.reserve(n * nf * 8);
+    soa.reserve(n * nf * 4);
     for (std::size_t k = 0; k < nfloat; ++k)
       for (std::size_t i = 0; i < n; ++i) {
         floats(i, v);
-        if (offset_positions && k < 3) appendBinary(soa, unshift(v[k], offset[static_cast<Eigen::Index>(k)]));
-        else appendBinary(soa, v[k]);
+        appendBinary(soa, v[k]);
       }
     if (colours)
       for (std::size_t i = 0; i < n; ++i) appendBinary(soa, cloud.colours[i]);

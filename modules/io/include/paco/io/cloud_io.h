@@ -32,7 +32,7 @@ struct LabelledCloud {
   /// round the file's coordinates by more than 1e-5 of the cloud's size (coordinates far from 0
   /// for the cloud's size, as in UTM or national grids): it is then the cloud's centre rounded to
   /// a tidy number, and points hold small coordinates around it. Writers add it back (in double
-  /// precision where the format allows). Zero for clouds near the origin.
+  /// precision in .ply, .xyz, .npy and .vg; see saveCloud). Zero for clouds near the origin.
   Eigen::Vector3d coordinate_offset = Eigen::Vector3d::Zero();
   bool hasLabels() const { return !labels.empty(); }
   bool hasColours() const { return !colours.empty(); }
@@ -75,9 +75,11 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
 /// (PCD field "label", PLY property "label", .npy column 7 with zero normals when there are none;
 /// .vg/.bvg: one group per label with its fitted plane). Positions are written as
 /// points + coordinate_offset. With a zero offset binary formats store float32 and text formats
-/// the shortest text that reads back to the same float (at most 9 digits); with an offset, .pcd,
-/// .ply and .npy store double positions and text formats double-precision text (.bvg stays
-/// float32, the format's only type). Throws paco::IoError on
+/// the shortest text that reads back to the same float (at most 9 digits); with an offset, .ply
+/// and .npy store double positions, .xyz and .vg double-precision text. .pcd stays float32, the
+/// type PCL's point types and pcl_viewer read (a double x loads as 0 into pcl::PointXYZ), and so
+/// does .bvg, the format's only type: far coordinates lose precision in those two; write .ply,
+/// .xyz or .npy to keep it. Throws paco::IoError on
 /// failure (unwritable path, unknown extension, labels.size() != points.size()).
 void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudWriteOptions& options = {});
 
