@@ -79,7 +79,8 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
 /// and .npy store double positions, .xyz and .vg double-precision text. .pcd stays float32, the
 /// type PCL's point types and pcl_viewer read (a double x loads as 0 into pcl::PointXYZ), and so
 /// does .bvg, the format's only type: far coordinates lose precision in those two; write .ply,
-/// .xyz or .npy to keep it. Throws paco::IoError on
+/// .xyz or .npy to keep it (PCL's loadPLYFile reads double x y z into its float point types as
+/// zeros, as it does for PCD; loadCloud, CloudCompare and Open3D read them). Throws paco::IoError on
 /// failure (unwritable path, unknown extension, labels.size() != points.size()).
 void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudWriteOptions& options = {});
 
