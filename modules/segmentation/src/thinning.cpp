@@ -139,10 +139,10 @@ std::vector<int> strayPointsAmong(const pcl::PointCloud<PointT>& cloud, const st
 
   // Clustering every point costs a radius search per point, and with a far stray point the whole
   // part lies within one link (0.9 s for 4,000 points). Clustering one representative per
-  // half-link voxel bounds each search to a few dozen voxels; points join their voxel's group.
-  // A point lies within a voxel diagonal (0.87 link) of its representative, so representatives
-  // linked within (1 + sqrt 3) links join every pair of points within one link: groups may only
-  // be merged, never split, by the shortcut.
+  // half-link voxel bounds each search to a few dozen voxels; a point joins the group of its
+  // nearest representative. That one lies within a voxel diagonal (0.87 link) of the point, so
+  // representatives linked within (1 + sqrt 3) links join every pair of points within one link:
+  // groups may only be merged, never split, by the shortcut.
   const double leaf = 0.5 * link;
   auto representatives = std::make_shared<pcl::PointCloud<PointT>>();
   pcl::VoxelGrid<PointT> voxels;
@@ -165,45 +165,44 @@ std::vector<int> strayPointsAmong(const pcl::PointCloud<PointT>& cloud, const st
   for (std::size_t c = 0; c < clusters.size(); ++c)
     for (int r : clusters[c].indices) cluster_of[static_cast<std::size_t>(r)] = static_cast<int>(c);
   std::vector<int> group_of(finite->size(), -1);
-  std::vector<std::size_t> group_size(clusters.size(), 0);
+  std::vector<std::vector<int>> members(clusters.size());  // indices into `finite`
   pcl::Indices nearest(1);
   std::vector<float> squared(1);
   for (std::size_t i = 0; i < finite->size(); ++i)
     if (tree->nearestKSearch((*finite)[i], 1, nearest, squared) == 1) {
       group_of[i] = cluster_of[static_cast<std::size_t>(nearest[0])];
-      ++group_size[static_cast<std::size_t>(group_of[i])];
+      members[static_cast<std::size_t>(group_of[i])].push_back(static_cast<int>(i));
     }
 
   // A small group is stray when every other point is farther from it than the largest group is
   // wide. (A quarter of that width also caught real returns: three ground points 7 m below the
   // roof edge of a 17 m airborne-scanned building.) The largest group, not all other points: a
   // second stray would stretch those.
-  const auto main = static_cast<int>(std::max_element(group_size.begin(), group_size.end()) - group_size.begin());
+  const auto main = static_cast<std::size_t>(
+      std::max_element(members.begin(), members.end(),
+                       [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() < b.size(); }) -
+      members.begin());
   Eigen::AlignedBox3f main_box;
-  for (std::size_t i = 0; i < finite->size(); ++i)
-    if (group_of[i] == main) main_box.extend((*finite)[i].getVector3fMap());
+  for (int i : members[main]) main_box.extend((*finite)[static_cast<std::size_t>(i)].getVector3fMap());
   const double reach = main_box.diagonal().norm();
   const std::size_t largest_stray = std::max<std::size_t>(1, finite->size() / 200);
   pcl::KdTreeFLANN<PointT> all;
   all.setInputCloud(finite);
   std::vector<int> strays;
-  for (int g = 0; g < static_cast<int>(clusters.size()); ++g) {
-    const std::size_t size = group_size[static_cast<std::size_t>(g)];
-    if (g == main || size == 0 || size > largest_stray) continue;
+  for (std::size_t g = 0; g < members.size(); ++g) {
+    if (g == main || members[g].empty() || members[g].size() > largest_stray) continue;
     double gap = std::numeric_limits<double>::infinity();
-    const int k = static_cast<int>(size) + 1;  // enough to reach a point outside the group
-    for (std::size_t i = 0; i < finite->size(); ++i) {
-      if (group_of[i] != g) continue;
-      if (all.nearestKSearch((*finite)[i], k, nearest, squared) <= 0) continue;
+    const int k = static_cast<int>(members[g].size()) + 1;  // enough to reach a point outside the group
+    for (int i : members[g]) {
+      if (all.nearestKSearch((*finite)[static_cast<std::size_t>(i)], k, nearest, squared) <= 0) continue;
       for (std::size_t n = 0; n < nearest.size(); ++n)
-        if (group_of[static_cast<std::size_t>(nearest[n])] != g) {
+        if (group_of[static_cast<std::size_t>(nearest[n])] != static_cast<int>(g)) {
           gap = std::min(gap, std::sqrt(static_cast<double>(squared[n])));
           break;
         }
     }
     if (gap > reach)
-      for (std::size_t i = 0; i < finite->size(); ++i)
-        if (group_of[i] == g) strays.push_back(source[i]);
+      for (int i : members[g]) strays.push_back(source[static_cast<std::size_t>(i)]);
   }
   return strays;
 }
