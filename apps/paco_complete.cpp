@@ -200,14 +200,8 @@ int run(int argc, char** argv) {
   paco::app::PendingOutput vg_out(o.output);
   std::unique_ptr<paco::app::PendingOutput> pcd_out;
   if (!o.pcd.empty()) pcd_out = std::make_unique<paco::app::PendingOutput>(o.pcd);
-  paco::io::VertexGroups groups = paco::io::toVertexGroups(primitives);
-  groups.coordinate_offset = scan.coordinate_offset;
-  paco::io::saveVertexGroups(vg_out.writePath(), groups);
-  if (pcd_out) {
-    paco::io::LabelledCloud coloured = paco::io::primitivesToCloud(primitives);
-    coloured.coordinate_offset = scan.coordinate_offset;
-    paco::io::saveCloud(pcd_out->writePath(), coloured);
-  }
+  paco::io::saveVertexGroups(vg_out.writePath(), paco::io::toVertexGroups(primitives, scan.coordinate_offset));
+  if (pcd_out) paco::io::saveCloud(pcd_out->writePath(), paco::io::primitivesToCloud(primitives, scan.coordinate_offset));
   vg_out.commit();
   if (pcd_out) pcd_out->commit();
   timer.stop();

@@ -232,14 +232,10 @@ int run(int argc, char** argv) {
   paco::app::PendingOutput mesh_out(o.output), vg_out(o.vg_output), pcd_out(o.pcd_output);
   paco::app::moveToFileCoordinates(mesh, scan.coordinate_offset);
   paco::io::saveMesh(mesh_out.writePath(), mesh);
-  paco::io::VertexGroups groups = paco::io::toVertexGroups(primitives);
-  groups.coordinate_offset = scan.coordinate_offset;
-  paco::io::saveVertexGroups(vg_out.writePath(), groups);
+  paco::io::saveVertexGroups(vg_out.writePath(), paco::io::toVertexGroups(primitives, scan.coordinate_offset));
   paco::io::CloudWriteOptions compressed;
   compressed.pcd_encoding = paco::io::PcdEncoding::BinaryCompressed;
-  paco::io::LabelledCloud coloured = paco::io::primitivesToCloud(primitives);
-  coloured.coordinate_offset = scan.coordinate_offset;
-  paco::io::saveCloud(pcd_out.writePath(), coloured, compressed);
+  paco::io::saveCloud(pcd_out.writePath(), paco::io::primitivesToCloud(primitives, scan.coordinate_offset), compressed);
   mesh_out.commit();
   vg_out.commit();
   pcd_out.commit();

@@ -37,15 +37,11 @@ LabelledCloud readPlyCloud(const std::string& path, const std::string& bytes) {
   const std::size_t n = vertex->count;
   cloud.points.resize(n);
   if (ilabel >= 0) cloud.labels.resize(n);
-  Eigen::AlignedBox3d box;
-  for (std::size_t p = 0; p < n; ++p) extendFinite(box, vertex->scalars[ix][p], vertex->scalars[iy][p], vertex->scalars[iz][p]);
-  cloud.coordinate_offset = precisionOffset(box);
-  const Eigen::Vector3d& offset = cloud.coordinate_offset;
+  cloud.coordinate_offset = storePositionsNearZero(cloud.points, [&](std::size_t p) {
+    return Eigen::Vector3d(vertex->scalars[ix][p], vertex->scalars[iy][p], vertex->scalars[iz][p]);
+  });
   for (std::size_t p = 0; p < n; ++p) {
     pcl::PointNormal& q = cloud.points[p];
-    q.x = static_cast<float>(vertex->scalars[ix][p] - offset.x());
-    q.y = static_cast<float>(vertex->scalars[iy][p] - offset.y());
-    q.z = static_cast<float>(vertex->scalars[iz][p] - offset.z());
     q.normal_x = has_normals ? static_cast<float>(vertex->scalars[inx][p]) : 0.0f;
     q.normal_y = has_normals ? static_cast<float>(vertex->scalars[iny][p]) : 0.0f;
     q.normal_z = has_normals ? static_cast<float>(vertex->scalars[inz][p]) : 0.0f;
@@ -128,16 +124,8 @@ LabelledCloud readXyz(const std::string& path, const std::string& bytes) {
     q.curvature = 0.0f;
     cloud.points.push_back(q);
   }
-  Eigen::AlignedBox3d box;
-  for (std::size_t p = 0; p < cloud.points.size(); ++p)
-    extendFinite(box, positions[3 * p], positions[3 * p + 1], positions[3 * p + 2]);
-  cloud.coordinate_offset = precisionOffset(box);
-  for (std::size_t p = 0; p < cloud.points.size(); ++p) {
-    pcl::PointNormal& q = cloud.points[p];
-    q.x = static_cast<float>(positions[3 * p] - cloud.coordinate_offset.x());
-    q.y = static_cast<float>(positions[3 * p + 1] - cloud.coordinate_offset.y());
-    q.z = static_cast<float>(positions[3 * p + 2] - cloud.coordinate_offset.z());
-  }
+  cloud.coordinate_offset = storePositionsNearZero(
+      cloud.points, [&](std::size_t p) { return Eigen::Vector3d(positions[3 * p], positions[3 * p + 1], positions[3 * p + 2]); });
   return cloud;
 }
 
@@ -170,15 +158,10 @@ LabelledCloud cloudFromNpy(const std::string& path, const NpyArray& a) {
   LabelledCloud cloud;
   cloud.points.resize(a.rows);
   cloud.has_normals = a.cols >= 6;
-  Eigen::AlignedBox3d box;
-  for (std::size_t r = 0; r < a.rows; ++r) detail::extendFinite(box, a.at(r, 0), a.at(r, 1), a.at(r, 2));
-  cloud.coordinate_offset = detail::precisionOffset(box);
-  const Eigen::Vector3d& offset = cloud.coordinate_offset;
+  cloud.coordinate_offset = detail::storePositionsNearZero(
+      cloud.points, [&](std::size_t r) { return Eigen::Vector3d(a.at(r, 0), a.at(r, 1), a.at(r, 2)); });
   for (std::size_t r = 0; r < a.rows; ++r) {
     pcl::PointNormal& q = cloud.points[r];
-    q.x = static_cast<float>(a.at(r, 0) - offset.x());
-    q.y = static_cast<float>(a.at(r, 1) - offset.y());
-    q.z = static_cast<float>(a.at(r, 2) - offset.z());
     q.normal_x = cloud.has_normals ? static_cast<float>(a.at(r, 3)) : 0.0f;
     q.normal_y = cloud.has_normals ? static_cast<float>(a.at(r, 4)) : 0.0f;
     q.normal_z = cloud.has_normals ? static_cast<float>(a.at(r, 5)) : 0.0f;
@@ -376,9 +359,10 @@ std::uint32_t primitiveColour(std::size_t i) {
   return palette[i % (sizeof(palette) / sizeof(palette[0]))];
 }
 
-LabelledCloud primitivesToCloud(const std::vector<PlanarPrimitive>& primitives) {
+LabelledCloud primitivesToCloud(const std::vector<PlanarPrimitive>& primitives, const Eigen::Vector3d& coordinate_offset) {
   LabelledCloud cloud;
   cloud.has_normals = true;
+  cloud.coordinate_offset = coordinate_offset;
   for (std::size_t i = 0; i < primitives.size(); ++i)
     for (const auto& p : primitives[i].points) {
       cloud.points.push_back(p);

@@ -80,10 +80,6 @@ Eigen::Vector3d precisionOffset(const Eigen::AlignedBox3d& finite_box) {
   return tidy.allFinite() ? tidy : centre;
 }
 
-void extendFinite(Eigen::AlignedBox3d& box, double x, double y, double z) {
-  if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) box.extend(Eigen::Vector3d(x, y, z));
-}
-
 double unshift(float value, double offset) {
   if (offset == 0.0 || !std::isfinite(value)) return static_cast<double>(value) + offset;
   char buffer[32];

@@ -33,8 +33,21 @@ void appendDouble(std::string& out, double value);
 /// the diagonal, so that the offset reads as a tidy number (85000, 446000). Zero for an empty or
 /// single-point box.
 Eigen::Vector3d precisionOffset(const Eigen::AlignedBox3d& finite_box);
-/// Grows `box` by (x, y, z) when all three are finite.
-void extendFinite(Eigen::AlignedBox3d& box, double x, double y, double z);
+/// What every reader does with the positions it parsed in double precision: stores
+/// `position(i)` (an Eigen::Vector3d) minus precisionOffset of the finite ones into
+/// points[i].x/y/z as float32, for every point of `points` (already sized), and returns that
+/// offset. Non-finite positions stay non-finite.
+template <typename Points, typename Position>
+Eigen::Vector3d storePositionsNearZero(Points& points, Position position) {
+  Eigen::AlignedBox3d box;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d x = position(i);
+    if (x.allFinite()) box.extend(x);
+  }
+  const Eigen::Vector3d offset = precisionOffset(box);
+  for (std::size_t i = 0; i < points.size(); ++i) points[i].getVector3fMap() = (position(i) - offset).template cast<float>();
+  return offset;
+}
 /// offset + value as a double, where `value` counts as its shortest decimal text ("0.1f" as
 /// 0.1), so that a coordinate read as "85123.45" and stored as 123.45f writes back as 85123.45.
 /// Exactly `value` when offset is 0.

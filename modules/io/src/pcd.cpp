@@ -218,19 +218,13 @@ LabelledCloud readPcd(const std::string& path, const std::string& bytes) {
   cloud.points.resize(points);
   if (ilabel >= 0) cloud.labels.resize(points);
   const std::size_t nf = fields.size();
-  Eigen::AlignedBox3d box;
-  for (std::size_t p = 0; p < points; ++p) {
+  cloud.coordinate_offset = storePositionsNearZero(cloud.points, [&](std::size_t p) {
     const double* row = values.data() + p * nf;
-    extendFinite(box, row[ix], row[iy], row[iz]);
-  }
-  cloud.coordinate_offset = precisionOffset(box);
-  const Eigen::Vector3d& offset = cloud.coordinate_offset;
+    return Eigen::Vector3d(row[ix], row[iy], row[iz]);
+  });
   for (std::size_t p = 0; p < points; ++p) {
     const double* row = values.data() + p * nf;
     pcl::PointNormal& q = cloud.points[p];
-    q.x = static_cast<float>(row[ix] - offset.x());
-    q.y = static_cast<float>(row[iy] - offset.y());
-    q.z = static_cast<float>(row[iz] - offset.z());
     q.normal_x = has_normals ? static_cast<float>(row[inx]) : 0.0f;
     q.normal_y = has_normals ? static_cast<float>(row[iny]) : 0.0f;
     q.normal_z = has_normals ? static_cast<float>(row[inz]) : 0.0f;

@@ -214,19 +214,13 @@ VertexGroups loadVertexGroups(const std::string& path) {
   };
   // Positions stay in double until the coordinate offset is known.
   std::vector<Eigen::Vector3d> positions(num_points);
-  Eigen::AlignedBox3d box;
-  readVectors("coordinates", [&](std::size_t i, const double* v) {
-    positions[i] = Eigen::Vector3d(v[0], v[1], v[2]);
-    box.extend(positions[i]);
-  });
-  vg.coordinate_offset = detail::precisionOffset(box);
-  for (std::size_t i = 0; i < num_points; ++i) {
-    pcl::PointNormal& p = vg.points[i];
-    p.getVector3fMap() = (positions[i] - vg.coordinate_offset).cast<float>();
+  readVectors("coordinates", [&](std::size_t i, const double* v) { positions[i] = Eigen::Vector3d(v[0], v[1], v[2]); });
+  vg.coordinate_offset = detail::storePositionsNearZero(vg.points, [&](std::size_t i) { return positions[i]; });
+  positions = {};
+  for (auto& p : vg.points) {
     p.normal_x = p.normal_y = p.normal_z = 0.0f;
     p.curvature = 0.0f;
   }
-  positions = {};
   const std::int64_t num_colors = in.count("num_colors");
   if (num_colors != 0 && num_colors != n)
     fail(path, "malformed: num_colors is " + std::to_string(num_colors) + ", expected 0 or " + std::to_string(n));
@@ -407,9 +401,10 @@ void saveVertexGroups(const std::string& path, const VertexGroups& vg) {
   detail::writeWholeFile(path, out);
 }
 
-VertexGroups toVertexGroups(const std::vector<PlanarPrimitive>& primitives) {
+VertexGroups toVertexGroups(const std::vector<PlanarPrimitive>& primitives, const Eigen::Vector3d& coordinate_offset) {
   VertexGroups vg;
   vg.has_normals = true;
+  vg.coordinate_offset = coordinate_offset;
   for (std::size_t g = 0; g < primitives.size(); ++g) {
     const PlanarPrimitive& prim = primitives[g];
     pcl::PointIndices indices;

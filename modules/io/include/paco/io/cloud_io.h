@@ -85,8 +85,10 @@ LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options
 void saveCloud(const std::string& path, const LabelledCloud& cloud, const CloudWriteOptions& options = {});
 
 /// The points of all primitives as one cloud with normals, labelled by primitive index and
-/// coloured by primitiveColour(), e.g. to look at completed primitives in pcl_viewer.
-LabelledCloud primitivesToCloud(const std::vector<PlanarPrimitive>& primitives);
+/// coloured by primitiveColour(), e.g. to look at completed primitives in pcl_viewer. Primitives
+/// made from a cloud read with a coordinate offset pass it on (LabelledCloud::coordinate_offset).
+LabelledCloud primitivesToCloud(const std::vector<PlanarPrimitive>& primitives,
+                                const Eigen::Vector3d& coordinate_offset = Eigen::Vector3d::Zero());
 /// A colour for primitive i, packed 0xRRGGBB, from a palette of 12 well-separated colours.
 std::uint32_t primitiveColour(std::size_t i);
 

@@ -46,8 +46,10 @@ VertexGroups loadVertexGroups(const std::string& path);
 /// disagree with the points (index out of range, sizes that differ).
 void saveVertexGroups(const std::string& path, const VertexGroups& groups);
 
-/// One group per primitive; the points of all primitives are concatenated.
-VertexGroups toVertexGroups(const std::vector<PlanarPrimitive>& primitives);
+/// One group per primitive; the points of all primitives are concatenated. Primitives made from
+/// a cloud read with a coordinate offset pass it on, so that the file gets the input's coordinates.
+VertexGroups toVertexGroups(const std::vector<PlanarPrimitive>& primitives,
+                            const Eigen::Vector3d& coordinate_offset = Eigen::Vector3d::Zero());
 /// One primitive per group, with the group's plane (the stored one, or a fit if it is missing).
 std::vector<PlanarPrimitive> toPrimitives(const VertexGroups& groups);
 
