@@ -8,6 +8,8 @@
 
 #include <paco/common/child_process.h>
 
+#include "cbc_verdict.h"
+
 #include <Cbc_C_Interface.h>
 #include <glpk.h>
 
@@ -263,15 +265,12 @@ class Cbc_mixed_integer_program_traits : public CGAL::Mixed_integer_program_trai
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
     const double* best = Cbc_bestSolution(model);
     run.optimal = Cbc_isProvenOptimal(model) != 0;
-    run.hit_time_limit = Cbc_isSecondsLimitReached(model) != 0 || Cbc_secondaryStatus(model) == 4;
-    run.infeasible = Cbc_isProvenInfeasible(model) != 0;
-    // When the time limit cuts CBC's pre-processing short, its cut generators can report a feasible
-    // program infeasible (seen on PolyFit programs, which the empty surface always satisfies): a
-    // verdict reached with the time used up is a time-out, not a proof.
-    if (run.infeasible && !best && elapsed >= seconds) {
-      run.infeasible = false;
-      run.hit_time_limit = true;
-    }
+    const CbcVerdict verdict =
+        judgeCbcRun(Cbc_isProvenInfeasible(model) != 0,
+                    Cbc_isSecondsLimitReached(model) != 0 || Cbc_secondaryStatus(model) == 4, best != nullptr,
+                    elapsed, seconds);
+    run.infeasible = verdict.infeasible;
+    run.hit_time_limit = verdict.hit_time_limit;
     run.status = Cbc_status(model);
     run.secondary_status = Cbc_secondaryStatus(model);
     if (best) {
