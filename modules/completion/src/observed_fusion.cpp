@@ -1,6 +1,7 @@
 #include <paco/completion/observed_fusion.h>
 
 #include "nearest_neighbours.h"
+#include "plane_bins.h"
 
 #include <paco/common/angles.h>
 #include <paco/common/error.h>
@@ -14,7 +15,6 @@
 #include <limits>
 #include <numeric>
 #include <optional>
-#include <unordered_map>
 #include <utility>
 
 namespace paco {
@@ -198,9 +198,8 @@ std::size_t thinOut(pcl::PointCloud<pcl::PointNormal>& points, double fraction, 
 class SightLines {
  public:
   struct Met {
-    double a, b;      // across the direction
-    double t;         // along it
-    bool faces_along; // its segment's normal points along the direction
+    double t;          // along the direction
+    bool faces_along;  // its segment's normal points along the direction
   };
   struct FirstMet {
     const Met* ahead = nullptr;   // along +direction
@@ -210,24 +209,21 @@ class SightLines {
   /// One direction per frame: its columns are the direction and two unit vectors across it.
   SightLines(const std::vector<PlanarPrimitive>& observed, std::size_t min_points,
              const std::vector<Eigen::Matrix3d>& frames, double radius)
-      : radius_(radius), directions_(frames.size()) {
-    if (!(radius_ > 0.0)) return;  // a line of no width meets no point
-    for (std::size_t k = 0; k < frames.size(); ++k) {
-      Direction& direction = directions_[k];
-      direction.along = frames[k].col(0);
-      direction.across = frames[k].col(1);
-      direction.up = frames[k].col(2);
+      : radius_(radius) {
+    directions_.reserve(frames.size());
+    for (const Eigen::Matrix3d& frame : frames) {
+      // Cells as wide as a line: a line of no width has no cells and meets no point.
+      Direction direction{frame.col(0), frame.col(1), frame.col(2), completion::detail::PlaneBins<Met>(radius)};
       for (const auto& segment : observed) {
         if (!isTrusted(segment, min_points)) continue;
         const double facing = segment.plane.normal.normalized().dot(direction.along);
         if (std::abs(facing) < kMinFacing) continue;
         for (const auto& p : segment.points) {
           const Eigen::Vector3d x = position(p);
-          direction.points.push_back({x.dot(direction.across), x.dot(direction.up), x.dot(direction.along), facing > 0.0});
-          direction.bins[key(bin(direction.points.back().a), bin(direction.points.back().b))].push_back(
-              direction.points.size() - 1);
+          direction.met.insert(x.dot(direction.across), x.dot(direction.up), Met{x.dot(direction.along), facing > 0.0});
         }
       }
+      directions_.push_back(std::move(direction));
     }
   }
 
@@ -235,21 +231,13 @@ class SightLines {
 
   FirstMet firstMet(const Eigen::Vector3d& q, std::size_t k, double gap = 0.0) const {
     FirstMet first;
-    if (!(radius_ > 0.0)) return first;
     const Direction& direction = directions_[k];
-    const double qa = q.dot(direction.across), qb = q.dot(direction.up), qt = q.dot(direction.along);
-    const long long ia = bin(qa), ib = bin(qb);
-    for (long long da = -1; da <= 1; ++da)
-      for (long long db = -1; db <= 1; ++db) {
-        const auto found = direction.bins.find(key(ia + da, ib + db));
-        if (found == direction.bins.end()) continue;
-        for (std::size_t i : found->second) {
-          const Met& p = direction.points[i];
-          if ((p.a - qa) * (p.a - qa) + (p.b - qb) * (p.b - qb) > radius_ * radius_) continue;
-          if (p.t > qt + gap && (!first.ahead || p.t < first.ahead->t)) first.ahead = &p;
-          if (p.t < qt - gap && (!first.behind || p.t > first.behind->t)) first.behind = &p;
-        }
-      }
+    const double qt = q.dot(direction.along);
+    direction.met.forEachWithin(q.dot(direction.across), q.dot(direction.up), radius_, [&](const auto& entry) {
+      const Met& p = entry.value;
+      if (p.t > qt + gap && (!first.ahead || p.t < first.ahead->t)) first.ahead = &p;
+      if (p.t < qt - gap && (!first.behind || p.t > first.behind->t)) first.behind = &p;
+    });
     return first;
   }
 
@@ -257,11 +245,8 @@ class SightLines {
   static constexpr double kMinFacing = 0.5;  // cos 60 degrees
   struct Direction {
     Eigen::Vector3d along, across, up;
-    std::vector<Met> points;
-    std::unordered_map<long long, std::vector<std::size_t>> bins;
+    completion::detail::PlaneBins<Met> met;  // the seen points, binned across the direction
   };
-  long long bin(double x) const { return static_cast<long long>(std::floor(x / radius_)); }
-  static long long key(long long ia, long long ib) { return ia * 2000003LL + ib; }
 
   double radius_;
   std::vector<Direction> directions_;
@@ -337,9 +322,9 @@ class ScannerView {
     }
     across_ = along_.unitOrthogonal();
     up_ = along_.cross(across_);
-    bin_ = tolerance_;
+    double cell = tolerance_;
     if (eye_) {
-      // Bins of directions, as wide as a cell at the seen points' median depth.
+      // Cells of directions, as wide as a cell at the seen points' median depth.
       std::vector<double> depths;
       for (const auto& x : seen) depths.push_back((x - *eye_).dot(along_));
       std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
@@ -347,36 +332,31 @@ class ScannerView {
       if (!(median_depth_ > 0.0))
         throw InvalidInputError("fuseWithObserved: most seen points lie behind the scanner position; give where "
                                 "the scanner stood");
-      bin_ = tolerance_ / median_depth_;
+      cell = tolerance_ / median_depth_;
     }
+    seen_ = completion::detail::PlaneBins<double>(cell);
     for (const auto& x : seen) {
       const Sight s = sight(x);
-      if (s.valid) bins_[key(s.ia, s.ib)].push_back(s);
+      if (s.valid) seen_.insert(s.a, s.b, s.distance);
     }
   }
 
   bool wouldHaveSeen(const Eigen::Vector3d& q) const {
-    if (bins_.empty()) return false;
+    if (seen_.empty()) return false;
     const Sight s = sight(q);
     if (!s.valid) return false;
     // The nearest seen point to the scanner among those within a cell of the line of sight.
     double nearest = std::numeric_limits<double>::infinity();
-    for (long long da = -1; da <= 1; ++da)
-      for (long long db = -1; db <= 1; ++db) {
-        const auto found = bins_.find(key(s.ia + da, s.ib + db));
-        if (found == bins_.end()) continue;
-        for (const Sight& p : found->second)
-          if ((p.a - s.a) * (p.a - s.a) + (p.b - s.b) * (p.b - s.b) <= bin_ * bin_)
-            nearest = std::min(nearest, p.distance);
-      }
+    const bool binned = seen_.forEachWithin(s.a, s.b, seen_.cellWidth(),
+                                            [&](const auto& entry) { nearest = std::min(nearest, entry.value); });
+    if (!binned) return false;  // too far out across the lines of sight: keep
     return s.distance < nearest - tolerance_;  // no seen point near the line: infinity
   }
 
  private:
   struct Sight {
-    double a = 0.0, b = 0.0;   // across the line of sight
-    long long ia = 0, ib = 0;  // their bin
-    double distance = 0.0;     // from the scanner along it
+    double a = 0.0, b = 0.0;  // across the line of sight
+    double distance = 0.0;    // from the scanner along it
     bool valid = false;
   };
 
@@ -391,31 +371,24 @@ class ScannerView {
       s.b = r.dot(up_) / depth;
       s.distance = r.norm();
     } else {
+      // Measured from a seen point, so that real points are well inside the grid's range.
       const Eigen::Vector3d r = q - origin_;
       s.a = r.dot(across_);
       s.b = r.dot(up_);
       s.distance = r.dot(along_);
     }
-    // Checked as doubles: casting a bin beyond the range of long long is undefined.
-    const double ia = std::floor(s.a / bin_), ib = std::floor(s.b / bin_);
-    if (!(std::abs(ia) < static_cast<double>(kMaxBin) && std::abs(ib) < static_cast<double>(kMaxBin))) return s;
-    s.ia = static_cast<long long>(ia);
-    s.ib = static_cast<long long>(ib);
     s.valid = true;
     return s;
   }
-  static long long key(long long ia, long long ib) { return ia * (2 * kMaxBin + 1) + ib; }
-  // Bins are counted from a seen point, so that real points are well inside; farther is kept.
-  static constexpr long long kMaxBin = 1LL << 30;
   // A line of sight is at least this many of the seen points' median spacings wide.
   static constexpr double kSpacings = 2.0;
 
   double tolerance_;
-  double bin_ = 1.0, median_depth_ = 1.0;
+  double median_depth_ = 1.0;
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero(), along_ = Eigen::Vector3d::UnitZ(),
                   across_ = Eigen::Vector3d::UnitX(), up_ = Eigen::Vector3d::UnitY();
   std::optional<Eigen::Vector3d> eye_;
-  std::unordered_map<long long, std::vector<Sight>> bins_;
+  completion::detail::PlaneBins<double> seen_{0.0};  // distance from the scanner, by line of sight
 };
 
 // Adds grid points on the faces of the seen box where no fused point is near and the scan does
