@@ -41,6 +41,7 @@ struct Options {
   std::vector<std::string> positional;
   std::size_t procedural = 0;
   std::string levels = "0,1,2";
+  bool single_scanner = false;
   int views = 8;
   double noise = 0.0;
   std::string mode = "nearest";
@@ -226,6 +227,9 @@ int run(int argc, char** argv) {
       ("views", po::value(&o.views)->default_value(o.views), "viewpoints per part and level (8: cube corners; more: Fibonacci sphere)")
       ("noise", po::value(&o.noise)->default_value(o.noise), "Gaussian noise on the inputs, sigma in % of the diagonal (paper: 1.5, 3, 4.5)")
       ("mode", po::value(&o.mode)->default_value(o.mode), "nearest (AdaPoinTr: drop points nearest to the viewpoint) or visibility (ray cast)")
+      ("single-scanner", po::bool_switch(&o.single_scanner),
+       "with --mode visibility: an input is what one scanner at the viewpoint sees (no other station adds to it), "
+       "as paco_reconstruct --seen-from-point assumes")
       ("augment-scale", po::value(&o.augment_scale), "random anisotropic scale per axis, log-uniform in MIN,MAX (e.g. 0.5,2)")
       ("augment-rotate", po::bool_switch(&o.augment_rotate), "random rotation of every part")
       ("seed", po::value(&o.seed)->default_value(o.seed), "base seed of every random choice")
@@ -276,6 +280,7 @@ int run(int argc, char** argv) {
   if (o.input_points < 1 || o.gt_points < 1 || o.dense_points < o.input_points)
     throw paco::app::UsageError("point counts must be >= 1, and --dense-points >= --input-points");
   if (o.mode != "nearest" && o.mode != "visibility") throw paco::app::UsageError("--mode must be nearest or visibility");
+  if (o.single_scanner && o.mode != "visibility") throw paco::app::UsageError("--single-scanner needs --mode visibility");
   if (o.segment && !paco::data::segmentationAvailable())
     throw paco::app::UsageError("--segment needs the segmentation module, which this build does not have");
   if (o.segment_min_points < 0)
@@ -288,6 +293,7 @@ int run(int argc, char** argv) {
   paco::data::BuildOptions build;
   paco::data::DatasetInfo& info = build.info;
   info.mode = o.mode;
+  info.single_scanner = o.single_scanner;
   info.levels = parseLevels(o.levels);
   info.views = o.views;
   info.noise_percent = o.noise;

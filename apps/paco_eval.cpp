@@ -62,6 +62,7 @@ struct Options {
   int threads = 1;
   bool no_normals = false;
   bool known_extent_oracle = false;
+  bool scanner_at_viewpoint = false;
 };
 
 void printHelp(const po::options_description& visible) {
@@ -247,6 +248,9 @@ int dataset(const Options& o) {
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
   b.method.known_extent_oracle = o.known_extent_oracle;
+  if (o.scanner_at_viewpoint && !b.method.fuse_observed)
+    throw paco::app::UsageError("--scanner-at-viewpoint works through observed fusion: drop --observed-fusion off");
+  b.method.use_scanner_position = o.scanner_at_viewpoint;
   b.metrics.num_samples = o.samples;
   b.failure_box = failureBoxFromName(o.failure_box);
   paco::InterruptGuard guard;
@@ -312,6 +316,9 @@ int run(int argc, char** argv) {
       ("no-normals", po::bool_switch(&o.no_normals), "give the methods the input points without normals (they are estimated)")
       ("known-extent-oracle", po::bool_switch(&o.known_extent_oracle),
        "paco, with fusion: the box fill knows the part's extent from the GT (an oracle: what completion scores when the extent is known)")
+      ("scanner-at-viewpoint", po::bool_switch(&o.scanner_at_viewpoint),
+       "paco, with fusion: the scanner stood at each sample's viewpoint, as paco_reconstruct --seen-from-point says "
+       "(needs a dataset built with --mode visibility)")
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");

@@ -187,6 +187,27 @@ TEST(DatasetInfo, SegmentMinimumsAreRecordedAndOldInfoFilesMeanFiftyWithoutParal
   EXPECT_EQ(plain.serialize(), DatasetInfo().serialize());
 }
 
+TEST(DatasetInfo, SingleScannerAndViewpointDistanceAreRecordedOnlyWhenNotTheDefault) {
+  DatasetInfo info;
+  info.mode = "visibility";
+  const std::string stations = info.serialize();
+  info.single_scanner = true;
+  info.viewpoint_distance = 1.5;
+  const DatasetInfo back = DatasetInfo::parse(info.serialize(), "here");
+  EXPECT_TRUE(back.single_scanner);
+  EXPECT_EQ(back.viewpoint_distance, 1.5);
+  EXPECT_NE(info.describe().find("one scanner"), std::string::npos) << info.describe();
+  // The defaults write the info file of before, so that such datasets keep their identity.
+  info.single_scanner = false;
+  info.viewpoint_distance = 1.0;
+  EXPECT_EQ(info.serialize(), stations);
+  EXPECT_EQ(stations.find("single_scanner"), std::string::npos);
+  EXPECT_EQ(stations.find("viewpoint_distance"), std::string::npos);
+  const DatasetInfo old = DatasetInfo::parse("format_version\t1\nmode\tvisibility\n", "old");
+  EXPECT_FALSE(old.single_scanner);
+  EXPECT_EQ(old.viewpoint_distance, 1.0);
+}
+
 TEST(DatasetIo, ReaderReadsBackWhatWasWritten) {
   paco::test::TempDir dir;
   const BuildOptions options = smallOptions();

@@ -78,8 +78,16 @@ TEST(PacoDatasetTool, BadMeshesAreListedNotFatal) {
   EXPECT_NE(log.find("needs --segment"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(build_new + " --segment-min-parallel-points 0", &log), 2);
   EXPECT_NE(log.find("--segment-min-parallel-points needs --segment"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(build_new + " --single-scanner", &log), 2);
+  EXPECT_NE(log.find("--single-scanner needs --mode visibility"), std::string::npos) << log;
   EXPECT_FALSE(std::filesystem::exists(dir.file("ds2")));
   EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " --help", &log), 0);
+  // One scanner, recorded in the dataset's description.
+  ASSERT_EQ(paco::test::runCommand(paco::test::toolPath("paco_dataset") + " " + dir.file("meshes") + " " +
+                                       dir.file("ds3") + kSmall + " --mode visibility --single-scanner", &log), 0)
+      << log;
+  EXPECT_NE(log.find("one scanner"), std::string::npos) << log;
+  EXPECT_TRUE(paco::data::Dataset(dir.file("ds3")).info().single_scanner);
 }
 
 #else

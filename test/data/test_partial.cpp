@@ -101,4 +101,28 @@ TEST(Partial, VisibilityModeKeepsOnlyWhatTheScannerSees) {
   EXPECT_TRUE(visible[1]);
 }
 
+TEST(Partial, ASingleScannerKeepsEverythingItSeesAndNothingElse) {
+  const GroundTruth gt = normalisedBoss();
+  PartialOptions options;
+  options.mode = RemovalMode::Visibility;
+  options.single_scanner = true;
+  const PartialScanner scanner(gt, options, 3);
+  for (const int view : {0, 5}) {
+    const Eigen::Vector3d dir = viewpointDirection(view, 8);
+    // Asked to keep more than one scanner sees, it keeps all it sees: the same at 0 % and 25 %.
+    const PartialScan all = scanner.scan(dir, 0.0, 2);
+    const PartialScan simple = scanner.scan(dir, 0.25, 2);
+    EXPECT_EQ(all.missing_ratio, simple.missing_ratio) << "view " << view;
+    EXPECT_GT(simple.missing_ratio, 0.35) << "view " << view << ": a scanner sees about half of a convex part";
+    for (std::size_t i = 0; i < simple.points.size(); ++i)
+      ASSERT_GT(simple.normals[i].dot(dir - simple.points[i]), 0.0) << "view " << view << ": a back-facing point";
+    // Asked to keep less, it keeps the points nearest to the scanner (a shorter range).
+    EXPECT_NEAR(scanner.scan(dir, 0.75, 2).missing_ratio, 0.75, 1e-3) << "view " << view;
+  }
+  // With the stations, the other cube corners fill in up to the level.
+  PartialOptions stations = options;
+  stations.single_scanner = false;
+  EXPECT_NEAR(PartialScanner(gt, stations, 3).scan(viewpointDirection(0, 8), 0.25, 2).missing_ratio, 0.25, 0.01);
+}
+
 }  // namespace

@@ -11,15 +11,20 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
+#include <string>
 
 namespace ev = paco::evaluation;
 
 namespace {
 
-// Three parts named so that they fall in one split; returns that split's name.
-std::string writeDataset(const std::string& folder) {
+// Three parts named so that they fall in one split; returns that split's name. `mode`: how the
+// inputs were cut (nearest, or visibility with a single scanner).
+std::string writeDataset(const std::string& folder, const std::string& mode = "nearest") {
   paco::data::BuildOptions options;
+  options.info.mode = mode;
+  options.info.single_scanner = mode == "visibility";
   options.info.levels = {0, 2};
   options.info.views = 1;
   options.info.source = "test shapes";
@@ -166,5 +171,50 @@ TEST(Benchmark, NoNormalsOptionHandsTheMethodsBarePoints) {
     const auto records = ev::readRecords(run.csv_path);
     ASSERT_EQ(records.size(), 1u);
     EXPECT_EQ(records[0].message.rfind("0 of ", 0) == 0, drop) << records[0].message;
+  }
+}
+
+TEST(Benchmark, TheScannerStoodAtTheViewpointOfAVisibilityDatasetOnly) {
+  paco::test::TempDir dir;
+  // A method that reports where its input says the scanner stood.
+  ev::registerMethod(
+      "test-scanner-position", [](const ev::MethodInput& in, const ev::MethodOptions&) {
+        ev::MethodOutput out;
+        out.reason = ev::FailureReason::NoMesh;
+        if (!in.scanner_position) {
+          out.message = "none";
+        } else {
+          const Eigen::Vector3d& p = *in.scanner_position;
+          out.message = std::to_string(p.x()) + " " + std::to_string(p.y()) + " " + std::to_string(p.z());
+        }
+        return out;
+      },
+      false);
+  ev::BenchmarkOptions options;
+  options.methods = {"test-scanner-position"};
+  options.levels = {0};
+  options.views = {0};
+  options.limit = 1;
+  options.progress = false;
+  options.metrics.num_samples = 500;
+  for (const std::string mode : {"nearest", "visibility"}) {
+    options.dataset = dir.file(mode);
+    options.split = writeDataset(options.dataset, mode);
+    options.output_dir = dir.file(mode + "-out");
+    const auto records = ev::readRecords(ev::runBenchmark(options).csv_path);
+    ASSERT_EQ(records.size(), 1u) << mode;
+    // View 0 of a dataset of one view is the cube corner (1, 1, 1) / sqrt(3), one diagonal out.
+    const std::string corner = std::to_string(1.0 / std::sqrt(3.0));
+    EXPECT_EQ(records[0].message, mode == "nearest" ? "none" : corner + " " + corner + " " + corner) << mode;
+  }
+  // Nearest mode removed what a scanner at the viewpoint would have seen: asking for it is an error.
+  options.method.use_scanner_position = true;
+  options.dataset = dir.file("nearest");
+  options.output_dir = dir.file("asked");
+  try {
+    ev::runBenchmark(options);
+    ADD_FAILURE() << "no error";
+  } catch (const paco::InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--mode visibility"), std::string::npos) << e.what();
   }
 }

@@ -136,6 +136,28 @@ TEST(PacoMethod, BadFrameAndMissingModelAreFailuresThatSayWhy) {
   EXPECT_NE(out.message.find("missing.pt"), std::string::npos) << out.message;
 }
 
+TEST(PacoMethod, TheScannerPositionReachesFusion) {
+  paco::test::TempDir dir;
+  ev::MethodOptions options = tinyModelOptions(dir);
+  options.ensemble_turns = 1;
+  options.use_scanner_position = true;
+  ev::MethodInput in = boxWithoutTop();
+  const ev::MethodOutput unknown = ev::runMethod("paco", in, options);
+  EXPECT_EQ(unknown.reason, ev::FailureReason::Threw);
+  EXPECT_NE(unknown.message.find("scanner's position"), std::string::npos) << unknown.message;
+  // Fusion refuses a scanner inside the object, at the seen points' centre: proof that it got it.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const auto& p : in.input) centre += p.getVector3fMap().cast<double>();
+  in.scanner_position = centre / static_cast<double>(in.input.size());
+  const ev::MethodOutput inside = ev::runMethod("paco", in, options);
+  EXPECT_EQ(inside.reason, ev::FailureReason::Threw);
+  EXPECT_NE(inside.message.find("centre of the seen points"), std::string::npos) << inside.message;
+  in.scanner_position = Eigen::Vector3d(0.0, 0.0, 2.0);  // above the open top
+  const ev::MethodOutput above = ev::runMethod("paco", in, options);
+  EXPECT_NE(above.reason, ev::FailureReason::Threw) << above.message;
+  EXPECT_TRUE(above.has_planes) << above.message;
+}
+
 // MethodOptions repeats the library's defaults because the evaluation module builds without the
 // completion module; paco_eval takes its defaults from MethodOptions. They must not drift apart.
 TEST(PacoMethod, DefaultsAreTheLibrarys) {

@@ -76,6 +76,8 @@ PartSamples buildPart(const std::string& part, const SurfaceMesh& mesh, const Bu
   partial.dense_points = static_cast<std::size_t>(info.dense_points);
   partial.output_points = static_cast<std::size_t>(info.input_points);
   partial.noise_percent = info.noise_percent;
+  partial.single_scanner = info.single_scanner;
+  partial.viewpoint_distance = info.viewpoint_distance;
   const PartialScanner scanner(out.ground_truth, partial, detail::mixSeed(base, 2));
 
   for (int level : info.levels) {

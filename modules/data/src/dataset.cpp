@@ -110,6 +110,9 @@ std::string DatasetInfo::serialize() const {
       << "gt_points\t" << gt_points << "\n"
       << "dense_points\t" << dense_points << "\n"
       << "input_labels_from_segmenter\t" << (input_labels_from_segmenter ? 1 : 0) << "\n";
+  // Written only when not the default, so that datasets without them keep their info file.
+  if (mode == "visibility" && single_scanner) out << "single_scanner\t1\n";
+  if (viewpoint_distance != 1.0) out << "viewpoint_distance\t" << formatDouble(viewpoint_distance) << "\n";
   // Only segmented inputs have a smallest plane; older readers ignore the key.
   if (input_labels_from_segmenter) out << "segment_min_points\t" << segment_min_points << "\n";
   // Written only when asked for, so that datasets without it keep their info file (and identity).
@@ -141,6 +144,8 @@ DatasetInfo DatasetInfo::parse(const std::string& text, const std::string& where
         std::string item;
         while (std::getline(list, item, ',')) info.levels.push_back(std::stoi(item));
       } else if (key == "views") info.views = std::stoi(value);
+      else if (key == "single_scanner") info.single_scanner = value == "1";
+      else if (key == "viewpoint_distance") info.viewpoint_distance = std::stod(value);
       else if (key == "noise_percent") info.noise_percent = std::stod(value);
       else if (key == "augment_scale_min") info.augment_scale_min = std::stod(value);
       else if (key == "augment_scale_max") info.augment_scale_max = std::stod(value);
@@ -169,13 +174,17 @@ DatasetInfo DatasetInfo::parse(const std::string& text, const std::string& where
 
 std::string DatasetInfo::describe() const {
   std::ostringstream out;
-  out << "views: " << (mode == "visibility" ? "visibility (ray cast from the viewpoint, CGAL AABB tree)"
-                                            : "nearest (AdaPoinTr: points nearest to the viewpoint removed)")
-      << "\n";
+  out << "views: "
+      << (mode == "visibility"
+              ? "visibility (ray cast from the viewpoint, CGAL AABB tree; " +
+                    std::string(single_scanner ? "one scanner" : "other cube corners add what they see") + ")"
+              : std::string("nearest (AdaPoinTr: points nearest to the viewpoint removed)"))
+      << "\nviewpoint distance: " << formatDouble(viewpoint_distance) << " x the diagonal, from the centre\n";
   out << "levels: ";
   for (std::size_t i = 0; i < levels.size(); ++i)
     out << (i ? ", " : "") << toString(static_cast<MissingLevel>(levels[i])) << " ("
         << static_cast<int>(std::lround(100 * missingRatio(static_cast<MissingLevel>(levels[i])))) << " % missing)";
+  if (mode == "visibility" && single_scanner) out << "; with one scanner, at least that much (what it cannot see)";
   out << "\nviews per level: " << views << "\n";
   out << "noise: " << (noise_percent > 0 ? "Gaussian, sigma " + formatDouble(noise_percent) + " % of the diagonal" : "none") << "\n";
   out << "augmentation: ";

@@ -89,7 +89,7 @@ PartialScanner::PartialScanner(const GroundTruth& gt, const PartialOptions& opti
   diagonal_ = gt.diagonal;
   if (options.mode == RemovalMode::Visibility) {
     mesh_ = gt.mesh;
-    const int count = std::clamp(options.visibility_stations, 1, 8);
+    const int count = options.single_scanner ? 0 : std::clamp(options.visibility_stations, 1, 8);
     for (int s = 0; s < count; ++s) {
       stations_.push_back(viewpointDirection(s, 8) * options.viewpoint_distance);
       visible_.push_back(visibleFrom(mesh_, dense_points_, dense_normals_, stations_.back(), 1e-7 * diagonal_));
@@ -124,7 +124,8 @@ PartialScan PartialScanner::scan(const Eigen::Vector3d& direction, double missin
   } else {
     // A scanner at the viewpoint sees the visible points. When they are more than the level keeps,
     // the scanner's range is limited (keep the visible points nearest to it); when fewer, further
-    // stations (the other cube corners, nearest in angle first) add what they see.
+    // stations (the other cube corners, nearest in angle first) add what they see, unless the
+    // scanner is the only one (options_.single_scanner: no station was set up).
     std::vector<bool> seen(n, false);
     std::size_t seen_count = 0;
     auto add = [&](const std::vector<bool>& visible) {

@@ -70,9 +70,12 @@ struct Combination {
 };
 
 EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_mesh, const MeshMetrics& failure_score,
-                              const Combination& combination, const BenchmarkOptions& options) {
+                              const Combination& combination, const BenchmarkOptions& options,
+                              const data::DatasetInfo& info) {
   MethodInput in;
   in.input = sample.input;
+  // A visibility-mode input is what a scanner at the viewpoint saw (with one station, all of it).
+  if (info.mode == "visibility") in.scanner_position = sample.viewpoint * info.viewpoint_distance;
   if (options.drop_input_normals)
     for (auto& p : in.input) p.normal_x = p.normal_y = p.normal_z = 0.0f;
   in.input_labels = sample.input_labels;
@@ -127,6 +130,11 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
   checkOptions(options);
   const data::Split split = data::splitFromString(options.split);
   const data::Dataset dataset(options.dataset);
+  if (options.method.use_scanner_position && dataset.info().mode != "visibility")
+    throw InvalidInputError("dataset '" + options.dataset + "' was cut by distance from the viewpoint (" +
+                            dataset.info().mode + " mode), which removes the points nearest to it: a scanner " +
+                            "there would have seen them. The scanner's position needs a dataset built with " +
+                            "paco_dataset --mode visibility");
 
   // Every sample of the split at the requested levels and views, in the dataset's order (by part).
   std::vector<std::size_t> indices;
@@ -263,7 +271,7 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
               journal << key << '\n';
               journal.flush();
             }
-            r = evaluateCase(sample, gt_mesh, failure_score, c, options);
+            r = evaluateCase(sample, gt_mesh, failure_score, c, options, dataset.info());
           }
         } catch (const InterruptedError&) {
           break;

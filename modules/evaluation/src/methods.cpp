@@ -334,6 +334,11 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     fusion.contradiction_radius = options.contradiction_radius;
     fusion.join_distance = options.join_distance;
     if (options.known_extent_oracle) fusion.known_extent_points = positionsOf(in.gt_points);
+    if (options.use_scanner_position) {
+      if (!in.scanner_position)
+        throw InvalidInputError("the paco method was asked to use the scanner's position, and this input has none");
+      fusion.scanner_position = *in.scanner_position;
+    }
     primitives = fuseWithObserved(std::move(primitives), makePrimitives(in.input, segmentation), fusion);
     out.seconds["fuse"] = secondsSince(fuse_start);
   }

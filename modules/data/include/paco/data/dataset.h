@@ -77,6 +77,13 @@ struct PartRecord {
 struct DatasetInfo {
   int format_version = 1;
   std::string mode = "nearest";       ///< "nearest" (AdaPoinTr removal) or "visibility" (ray cast)
+  /// Visibility mode: one scanner at the viewpoint and no other station
+  /// (PartialOptions::single_scanner): an input is what it sees, all of it when the level keeps
+  /// more (at 25 % missing, on a part like a cube), else the part nearest to it.
+  bool single_scanner = false;
+  /// Distance of every viewpoint (and station) from the part's centre, in units of its diagonal
+  /// (PartialOptions::viewpoint_distance): a sample's scanner stood at viewpoint * this.
+  double viewpoint_distance = 1.0;
   std::vector<int> levels{0, 1, 2};   ///< MissingLevel values present
   int views = 8;                      ///< views per part and level
   double noise_percent = 0.0;         ///< Gaussian noise sigma, % of the diagonal

@@ -33,6 +33,8 @@ struct PartialOptions {
   double viewpoint_distance = 1.0;   ///< distance of the viewpoint from the centre (diagonal units; > 0.5)
   double noise_percent = 0.0;        ///< Gaussian sigma per coordinate, % of the diagonal (0: none)
   int visibility_stations = 8;       ///< Visibility mode: stations at the first 1..8 cube corners (default 8)
+  /// Visibility mode: only the scanner at the viewpoint, no station adds to what it sees.
+  bool single_scanner = false;
 };
 
 /// A partial input.

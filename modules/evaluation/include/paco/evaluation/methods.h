@@ -15,6 +15,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,9 @@ struct MethodInput {
   pcl::PointCloud<pcl::PointNormal> gt_points;  ///< GT surface points (oracle only)
   std::vector<int> gt_labels;               ///< per GT point: index into gt_planes (oracle only)
   std::vector<Plane> gt_planes;             ///< the complete set of GT planes (oracle only)
+  /// Where the scanner stood, in the input's frame, when known (a dataset built with
+  /// `--mode visibility`); used by paco with MethodOptions::use_scanner_position.
+  std::optional<Eigen::Vector3d> scanner_position;
 };
 
 /// The smallest MethodOptions::max_input_points other than 0 (paco::kMinPointBudget), and its
@@ -120,6 +124,10 @@ struct MethodOptions {
   /// (paco::ObservedFusionOptions::known_extent_points). An oracle for analysis: what the
   /// pipeline scores when the part's extent is known (default false).
   bool known_extent_oracle = false;
+  /// paco, with fusion: drop the completed points that a scanner at MethodInput::scanner_position
+  /// would have seen (paco::ObservedFusionOptions::scanner_position), as `paco_reconstruct
+  /// --seen-from-point` does (default false).
+  bool use_scanner_position = false;
   /// paco: LibTorch threads (process-wide, set when the model is first loaded; default 1, since
   /// the evaluation runs samples in parallel with --jobs).
   int completion_threads = 1;
