@@ -8,11 +8,13 @@
 #include <paco/common/normalization.h>
 #include <paco/common/point_types.h>
 #include <paco/completion/observed_fusion.h>
+#include <paco/completion/parametric_completer.h>
 #include <paco/completion/turn_ensemble.h>
 #include <paco/io/cloud_io.h>
 
 #include <Eigen/Geometry>
 #include <boost/algorithm/string.hpp>
+#include <boost/program_options.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -191,6 +193,42 @@ struct ScanKnowledgeFlags {
       throw UsageError("--scanner-cell must be in (0, 1) (a fraction of the diagonal), got " + shortNumber(scanner_cell));
     knowledge.scanner_cell = scanner_cell;
     return knowledge;
+  }
+};
+
+/// The completion options of paco_reconstruct and paco_complete: which predictions are kept, and
+/// how they meet the scan (fusion, and what is known of the object and the scanner).
+struct CompletionFlags {
+  double threshold = ParametricCompleter().getConfidenceThreshold();
+  int turns = TurnEnsembleOptions().turns;
+  bool no_fusion = false;
+  ScanKnowledgeFlags knowledge;
+  FusionFlags fusion = libraryFusionFlags();
+
+  /// `no_fusion_help` says what the tool does without fusion.
+  void addTo(boost::program_options::options_description& options, const std::string& no_fusion_help) {
+    namespace po = boost::program_options;
+    options.add_options()
+        ("threshold", po::value(&threshold)->default_value(threshold, shortNumber(threshold)),
+         "keep completed primitives with confidence above this, in [0, 1]")
+        ("no-fusion", po::bool_switch(&no_fusion), no_fusion_help.c_str());
+    addTurnsOption(options, turns);
+    knowledge.addTo(options);
+    fusion.addTo(options);
+  }
+
+  /// Throws UsageError naming the option that is out of range or malformed, and IoError for a
+  /// --known-extent file that cannot be read; returns what is known of the object and scanner.
+  ScanKnowledge validate() const {
+    if (!(threshold >= 0.0 && threshold <= 1.0))
+      throw UsageError("--threshold must be in [0, 1], got " + shortNumber(threshold));
+    checkTurns(turns);
+    fusion.validate();
+    const ScanKnowledge parsed = knowledge.parse();
+    if (!parsed.empty() && no_fusion)
+      throw UsageError("--known-extent, --seen-from and --seen-from-point work through the fusion step: drop "
+                       "--no-fusion");
+    return parsed;
   }
 };
 

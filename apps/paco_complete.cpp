@@ -34,21 +34,13 @@ const char kTool[] = "paco_complete";
 struct Options {
   std::string input, output, pcd, model;
   std::string segmenter = "gocopp";
-  int min_points = 0;
-  int min_parallel_points = 0;
-  double noise_adaptation = paco::kScanNoiseMultiple;
   double epsilon = 0.004;
-  double threshold = paco::ParametricCompleter().getConfidenceThreshold();
-  int turns = paco::TurnEnsembleOptions().turns;
-  bool no_fusion = false;
-  paco::app::ScanKnowledgeFlags knowledge;
-  paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
+  paco::app::ScanSegmentationFlags scan;
+  paco::app::CompletionFlags completion;
   int threads = 0;
   int points = 2048;
   bool use_labels = false;
   bool drop_non_finite = false;
-  std::size_t max_points = paco::kDefaultScanPointBudget;
-  bool keep_stray_points = false;
 };
 
 void printHelp(const po::options_description& visible) {
@@ -76,20 +68,12 @@ int run(int argc, char** argv) {
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "gocopp, region-growing, ransac or efficient-ransac")
       ("epsilon,e", po::value(&o.epsilon)->default_value(o.epsilon, "0.004"), "segmentation inlier distance, fraction of the bounding-box diagonal")
       ("use-labels", po::bool_switch(&o.use_labels), "use the input file's labels as the segmentation (no segmenter)")
-      ("threshold", po::value(&o.threshold)->default_value(o.threshold, paco::app::shortNumber(o.threshold)), "keep primitives with confidence above this, in [0, 1]")
-      ("no-fusion", po::bool_switch(&o.no_fusion),
-       "write the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("points", po::value(&o.points)->default_value(o.points), "points fed to the network (the training size)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "LibTorch threads (0: one per hardware thread)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop NaN/Inf points instead of failing");
-  paco::app::addMaxPointsOption(visible, o.max_points);
-  paco::app::addKeepStrayPointsOption(visible, o.keep_stray_points);
-  paco::app::addMinPointsOption(visible, o.min_points);
-  paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
-  paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
-  paco::app::addTurnsOption(visible, o.turns);
-  o.knowledge.addTo(visible);
-  o.fusion.addTo(visible);
+  o.scan.addTo(visible);
+  o.completion.addTo(visible, "write the network's primitives alone (the paper's way); by default seen faces keep "
+                              "their fitted planes and points");
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
   po::positional_options_description positional;
@@ -104,20 +88,10 @@ int run(int argc, char** argv) {
   paco::app::checkOutputPath(o.output, "-o", {".vg", ".bvg"});
   if (!o.pcd.empty()) paco::app::checkOutputPath(o.pcd, "--pcd", {".pcd"});
   paco::app::checkOutputsAreNotInputs(
-      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.knowledge.known_extent}},
+      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.completion.knowledge.known_extent}},
       {{"-o", o.output}, {"--pcd", o.pcd}});
-  if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
-    throw paco::app::UsageError("--threshold must be in [0, 1], got " + std::to_string(o.threshold));
-  paco::app::checkTurns(o.turns);
-  const paco::app::ScanKnowledge knowledge = o.knowledge.parse();
-  if (!knowledge.empty() && o.no_fusion)
-    throw paco::app::UsageError("--known-extent, --seen-from and --seen-from-point work through the fusion step: "
-                                "drop --no-fusion");
-  paco::app::validateMaxPoints(o.max_points);
-  paco::app::validateMinPoints(o.min_points);
-  paco::app::validateMinParallelPoints(o.min_parallel_points);
-  paco::app::validateNoiseAdaptation(o.noise_adaptation);
-  o.fusion.validate();
+  const paco::app::ScanKnowledge knowledge = o.completion.validate();
+  o.scan.validate();
   paco::app::validateThreads("--threads", o.threads, "one per hardware thread");
   if (!(o.epsilon > 0.0 && o.epsilon < 1.0))
     throw paco::app::UsageError("--epsilon must be in (0, 1) (a fraction of the bounding-box diagonal), got " +
@@ -163,7 +137,7 @@ int run(int argc, char** argv) {
   const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // Labels name input points, so a labelled input is used as it is.
   const auto cloud = o.use_labels ? std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points)
-                                  : paco::app::workingCloud(scan.points, o.max_points, o.keep_stray_points, timer);
+                                  : o.scan.workingCloudOf(scan.points, timer);
 
   paco::PlanarSegmentation segmentation;
   timer.start("segment");
@@ -172,7 +146,7 @@ int run(int argc, char** argv) {
       throw paco::InvalidInputError("'" + o.input + "' has no labels; drop --use-labels to segment it");
     segmentation = paco::app::segmentationFromLabels(scan, o.input);
   } else {
-    paco::setScanDefaults(*segmenter, cloud->size(), o.min_points, o.min_parallel_points, o.noise_adaptation);
+    o.scan.configure(*segmenter, cloud->size());
     segmenter->setInputCloud(cloud);
     segmenter->segment(segmentation);
   }
@@ -188,8 +162,9 @@ int run(int argc, char** argv) {
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
   std::vector<paco::PlanarPrimitive> primitives =
-      paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns, o.points, timer);
-  if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, scan_knowledge, timer);
+      paco::app::completeScan(model, cloud, segmentation, o.completion.threshold, o.completion.turns, o.points, timer);
+  if (!o.completion.no_fusion)
+    paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.completion.fusion, scan_knowledge, timer);
   if (primitives.empty())
     std::fprintf(stderr, "%s: warning: no primitive is above the threshold; try a lower --threshold\n",
                  kTool);

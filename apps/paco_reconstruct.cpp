@@ -36,23 +36,15 @@ struct Options {
   std::string input, output, vg_output, pcd_output;
   bool no_completion = false;
   std::string segmenter = "gocopp";
-  int min_points = 0;
-  int min_parallel_points = 0;
-  double noise_adaptation = paco::kScanNoiseMultiple;
+  paco::app::ScanSegmentationFlags scan;
   std::string model;
-  double threshold = paco::ParametricCompleter().getConfidenceThreshold();
-  int turns = paco::TurnEnsembleOptions().turns;
-  bool no_fusion = false;
-  paco::app::ScanKnowledgeFlags knowledge;
-  paco::app::FusionFlags fusion = paco::app::libraryFusionFlags();
+  paco::app::CompletionFlags completion;
   std::string assembler = "polyfit";
   std::string solver = "cbc";
   double time_limit = 60.0;
   std::size_t max_candidate_faces = paco::PolygonalAssembler::kDefaultMaxCandidateFaces;
   bool no_warm_start = false;
   bool drop_non_finite = false;
-  std::size_t max_points = paco::kDefaultScanPointBudget;
-  bool keep_stray_points = false;
   int threads = 0;
 };
 
@@ -85,9 +77,6 @@ int run(int argc, char** argv) {
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "gocopp, region-growing, ransac or efficient-ransac")
       ("model", po::value(&o.model), "model file (default: the shipped model, or $PACO_MODEL)")
       ("no-completion", po::bool_switch(&o.no_completion), "assemble the segments of the input as they are (the direct baseline)")
-      ("threshold", po::value(&o.threshold)->default_value(o.threshold, paco::app::shortNumber(o.threshold)), "keep completed primitives with confidence above this, in [0, 1]")
-      ("no-fusion", po::bool_switch(&o.no_fusion),
-       "use the network's primitives alone (the paper's way); by default seen faces keep their fitted planes and points")
       ("assembler", po::value(&o.assembler)->default_value(o.assembler), "polyfit or cell-complex")
       ("solver", po::value(&o.solver)->default_value(o.solver), "MIP solver of polyfit: cbc or glpk")
       ("time-limit", po::value(&o.time_limit)->default_value(o.time_limit), "assembly time budget in seconds")
@@ -96,14 +85,9 @@ int run(int argc, char** argv) {
       ("no-warm-start", po::bool_switch(&o.no_warm_start), "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for the network (0: all cores)")
       ("drop-non-finite", po::bool_switch(&o.drop_non_finite), "drop input points with NaN/Inf coordinates (default: fail)");
-  paco::app::addMaxPointsOption(visible, o.max_points);
-  paco::app::addKeepStrayPointsOption(visible, o.keep_stray_points);
-  paco::app::addMinPointsOption(visible, o.min_points);
-  paco::app::addMinParallelPointsOption(visible, o.min_parallel_points);
-  paco::app::addNoiseAdaptationOption(visible, o.noise_adaptation);
-  paco::app::addTurnsOption(visible, o.turns);
-  o.knowledge.addTo(visible);
-  o.fusion.addTo(visible);
+  o.scan.addTo(visible);
+  o.completion.addTo(visible, "use the network's primitives alone (the paper's way); by default seen faces keep "
+                              "their fitted planes and points");
   po::options_description all;
   all.add(visible).add_options()("input", po::value(&o.input));
   po::positional_options_description positional;
@@ -115,20 +99,11 @@ int run(int argc, char** argv) {
   }
   if (o.input.empty()) throw paco::app::UsageError("expected an INPUT cloud");
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
-  if (!(o.threshold >= 0.0 && o.threshold <= 1.0)) throw paco::app::UsageError("--threshold must be in [0, 1]");
-  paco::app::checkTurns(o.turns);
-  const paco::app::ScanKnowledge knowledge = o.knowledge.parse();
-  if (!knowledge.empty() && o.no_fusion)
-    throw paco::app::UsageError("--known-extent, --seen-from and --seen-from-point work through the fusion step: "
-                                "drop --no-fusion");
+  const paco::app::ScanKnowledge knowledge = o.completion.validate();
   if (!knowledge.empty() && o.no_completion)
     throw paco::app::UsageError("--known-extent, --seen-from and --seen-from-point bound the completed scan: drop "
                                 "--no-completion");
-  paco::app::validateMaxPoints(o.max_points);
-  paco::app::validateMinPoints(o.min_points);
-  paco::app::validateMinParallelPoints(o.min_parallel_points);
-  paco::app::validateNoiseAdaptation(o.noise_adaptation);
-  o.fusion.validate();
+  o.scan.validate();
   paco::app::validateThreads("--threads", o.threads, "all cores");
   if (!(o.time_limit > 0.0))
     throw paco::app::UsageError("--time-limit must be more than 0 seconds, got " + paco::app::shortNumber(o.time_limit));
@@ -138,7 +113,7 @@ int run(int argc, char** argv) {
   paco::app::checkOutputPath(o.vg_output, "--vg", {".vg", ".bvg"});
   paco::app::checkOutputPath(o.pcd_output, "--pcd", {".pcd"});
   paco::app::checkOutputsAreNotInputs(
-      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.knowledge.known_extent}},
+      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.completion.knowledge.known_extent}},
       {{"-o", o.output}, {"--vg", o.vg_output}, {"--pcd", o.pcd_output}});
 
   // Check everything that can be checked before the slow work: names, model file, input file.
@@ -174,11 +149,11 @@ int run(int argc, char** argv) {
   paco::app::reportCoordinateOffset(scan.coordinate_offset);
   const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // A file without normals reads as zero normals, which the segmenter estimates.
-  const auto cloud = paco::app::workingCloud(scan.points, o.max_points, o.keep_stray_points, timer);
+  const auto cloud = o.scan.workingCloudOf(scan.points, timer);
 
   timer.start("segment");
   paco::PlanarSegmentation segmentation;
-  paco::setScanDefaults(*segmenter, cloud->size(), o.min_points, o.min_parallel_points, o.noise_adaptation);
+  o.scan.configure(*segmenter, cloud->size());
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();
@@ -198,16 +173,17 @@ int run(int argc, char** argv) {
   if (o.no_completion) {
     primitives = paco::makePrimitives(*cloud, segmentation);
   } else {
-    primitives = paco::app::completeScan(model, cloud, segmentation, o.threshold, o.turns,
+    primitives = paco::app::completeScan(model, cloud, segmentation, o.completion.threshold, o.completion.turns,
                                          paco::TurnEnsembleOptions().num_points, timer);
-    if (!o.no_fusion) paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.fusion, scan_knowledge, timer);
+    if (!o.completion.no_fusion)
+      paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.completion.fusion, scan_knowledge, timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
   if (primitives.empty())  // as a rule only with --no-fusion: fusion keeps the seen faces
     throw paco::InvalidInputError("nothing to assemble: no completed primitive has confidence above --threshold " +
-                                  paco::app::shortNumber(o.threshold) + "; lower --threshold" +
-                                  (o.no_fusion ? ", or drop --no-fusion to keep the seen faces" : ""));
+                                  paco::app::shortNumber(o.completion.threshold) + "; lower --threshold" +
+                                  (o.completion.no_fusion ? ", or drop --no-fusion to keep the seen faces" : ""));
   timer.start("assemble");
   assembler.setInputPrimitives(primitives);
   paco::SurfaceMesh mesh;

@@ -78,4 +78,41 @@ inline std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> workingCloud(const pcl
   return cloud;
 }
 
+/// The working cloud's and the segmenter's options of paco_reconstruct and paco_complete, added
+/// and checked alike.
+struct ScanSegmentationFlags {
+  std::size_t max_points = kDefaultScanPointBudget;
+  bool keep_stray_points = false;
+  int min_points = 0;           // 0: scanMinPointsPerPlane's share of the points
+  int min_parallel_points = 0;  // 0: scanMinPointsPerParallelPlane's share; -1: none
+  double noise_adaptation = kScanNoiseMultiple;
+
+  void addTo(boost::program_options::options_description& options) {
+    addMaxPointsOption(options, max_points);
+    addKeepStrayPointsOption(options, keep_stray_points);
+    addMinPointsOption(options, min_points);
+    addMinParallelPointsOption(options, min_parallel_points);
+    addNoiseAdaptationOption(options, noise_adaptation);
+  }
+
+  /// Throws UsageError naming the option that is out of range.
+  void validate() const {
+    validateMaxPoints(max_points);
+    validateMinPoints(min_points);
+    validateMinParallelPoints(min_parallel_points);
+    validateNoiseAdaptation(noise_adaptation);
+  }
+
+  /// The working cloud of `scan` (workingCloud) with these options.
+  std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> workingCloudOf(const pcl::PointCloud<pcl::PointNormal>& scan,
+                                                                    StageTimer& timer) const {
+    return workingCloud(scan, max_points, keep_stray_points, timer);
+  }
+
+  /// Sets the tools' scan defaults on `segmenter` for a working cloud of `points` points.
+  void configure(PlanarSegmenter<pcl::PointNormal>& segmenter, std::size_t points) const {
+    setScanDefaults(segmenter, points, min_points, min_parallel_points, noise_adaptation);
+  }
+};
+
 }  // namespace paco::app
