@@ -51,15 +51,21 @@ class PublicApi : public ::testing::Test {
     saveCheckpoint(dir.file("tiny.pt"), net);
     model = CompletionModel::load(dir.file("tiny.pt"));
   }
-  // Stages 2-3 once, every prediction kept; `proxies` receives the encoder's output.
-  std::vector<PlanarPrimitive> completeAll(const SegmentedBox& input, PlaneProxies& proxies,
-                                           const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity()) const {
+  // Stage 2: the input's planes encoded by the fixture's model.
+  PlaneProxies encode(const SegmentedBox& input, const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity()) const {
     PlaneProxyEncoder encoder;
     encoder.setModel(model);
     encoder.setInputCloud(input.cloud);
     encoder.setSegmentation(input.segmentation);
     encoder.setTurn(turn);
+    PlaneProxies proxies;
     encoder.encode(proxies);
+    return proxies;
+  }
+  // Stages 2-3 once, every prediction kept; `proxies` receives the encoder's output.
+  std::vector<PlanarPrimitive> completeAll(const SegmentedBox& input, PlaneProxies& proxies,
+                                           const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity()) const {
+    proxies = encode(input, turn);
     ParametricCompleter completer;
     completer.setModel(model);
     completer.setInputProxies(proxies);
@@ -80,12 +86,7 @@ TEST_F(PublicApi, CompletionModelReportsItsConfig) {
 }
 
 TEST_F(PublicApi, EncoderFillsTheProxies) {
-  PlaneProxyEncoder encoder;
-  encoder.setModel(model);
-  encoder.setInputCloud(box.cloud);
-  encoder.setSegmentation(box.segmentation);
-  PlaneProxies proxies;
-  encoder.encode(proxies);
+  const PlaneProxies proxies = encode(box);
   const auto& c = model->config();
   EXPECT_EQ(proxies.slots, c.plane_slots);
   EXPECT_EQ(proxies.width, c.width);
@@ -104,18 +105,8 @@ TEST_F(PublicApi, EncoderFillsTheProxies) {
 }
 
 TEST_F(PublicApi, CompleteReturnsTheNetworkOutputInTheUsersFrame) {
-  PlaneProxyEncoder encoder;
-  encoder.setModel(model);
-  encoder.setInputCloud(box.cloud);
-  encoder.setSegmentation(box.segmentation);
   PlaneProxies proxies;
-  encoder.encode(proxies);
-  ParametricCompleter completer;
-  completer.setModel(model);
-  completer.setInputProxies(proxies);
-  completer.setConfidenceThreshold(0.0);
-  std::vector<PlanarPrimitive> primitives;
-  completer.complete(primitives);
+  const std::vector<PlanarPrimitive> primitives = completeAll(box, proxies);
 
   // The same cloud through the network directly, in the normalised frame.
   const Normalization norm = Normalization::fromBoundingBox(*box.cloud);
@@ -305,15 +296,9 @@ TEST_F(PublicApi, CompleteWithTurnsIsTheCompleterWithOneTurnAndAVoteWithMore) {
 }
 
 TEST_F(PublicApi, ThresholdKeepsOnlyConfidentPrimitivesSorted) {
-  PlaneProxyEncoder encoder;
-  encoder.setModel(model);
-  encoder.setInputCloud(box.cloud);
-  encoder.setSegmentation(box.segmentation);
-  PlaneProxies proxies;
-  encoder.encode(proxies);
   ParametricCompleter completer;
   completer.setModel(model);
-  completer.setInputProxies(proxies);
+  completer.setInputProxies(encode(box));
   std::vector<PlanarPrimitive> all, confident;
   completer.setConfidenceThreshold(0.0);
   completer.complete(all);
@@ -372,12 +357,7 @@ TEST_F(PublicApi, CompleterValidatesItsInput) {
   std::vector<PlanarPrimitive> primitives;
   completer.setModel(model);
   EXPECT_THROW(completer.complete(primitives), InvalidInputError);  // no proxies
-  PlaneProxyEncoder encoder;
-  encoder.setModel(model);
-  encoder.setInputCloud(box.cloud);
-  encoder.setSegmentation(box.segmentation);
-  PlaneProxies proxies;
-  encoder.encode(proxies);
+  const PlaneProxies proxies = encode(box);
   completer.setInputProxies(proxies);
   completer.setConfidenceThreshold(1.5);
   EXPECT_THROW(completer.complete(primitives), InvalidInputError);
