@@ -318,7 +318,7 @@ int run(int argc, char** argv) {
        "paco, with fusion: the box fill knows the part's extent from the GT (an oracle: what completion scores when the extent is known)")
       ("scanner-at-viewpoint", po::bool_switch(&o.scanner_at_viewpoint),
        "paco, with fusion: the scanner stood at each sample's viewpoint, as paco_reconstruct --seen-from-point says "
-       "(needs a dataset built with --mode visibility)")
+       "(needs a dataset built with --mode visibility --single-scanner)")
       ("samples", po::value(&o.samples)->default_value(o.samples), "points sampled on each mesh")
       ("failure-box", po::value(&o.failure_box)->default_value(o.failure_box), "what a failure scores as: bbox (the GT's normalised bounding box) or cube (diagonal 1)")
       ("quiet,q", po::bool_switch(&o.quiet), "no progress bar or timings");

@@ -14,17 +14,18 @@
 #include <cmath>
 #include <set>
 #include <string>
+#include <tuple>
 
 namespace ev = paco::evaluation;
 
 namespace {
 
 // Three parts named so that they fall in one split; returns that split's name. `mode`: how the
-// inputs were cut (nearest, or visibility with a single scanner).
-std::string writeDataset(const std::string& folder, const std::string& mode = "nearest") {
+// inputs were cut (nearest or visibility), `single_scanner`: with visibility, by one scanner.
+std::string writeDataset(const std::string& folder, const std::string& mode = "nearest", bool single_scanner = false) {
   paco::data::BuildOptions options;
   options.info.mode = mode;
-  options.info.single_scanner = mode == "visibility";
+  options.info.single_scanner = single_scanner;
   options.info.levels = {0, 2};
   options.info.views = 1;
   options.info.source = "test shapes";
@@ -174,7 +175,7 @@ TEST(Benchmark, NoNormalsOptionHandsTheMethodsBarePoints) {
   }
 }
 
-TEST(Benchmark, TheScannerStoodAtTheViewpointOfAVisibilityDatasetOnly) {
+TEST(Benchmark, TheScannerStoodAtTheViewpointOfASingleScannerDatasetOnly) {
   paco::test::TempDir dir;
   // A method that reports where its input says the scanner stood.
   ev::registerMethod(
@@ -197,24 +198,29 @@ TEST(Benchmark, TheScannerStoodAtTheViewpointOfAVisibilityDatasetOnly) {
   options.limit = 1;
   options.progress = false;
   options.metrics.num_samples = 500;
-  for (const std::string mode : {"nearest", "visibility"}) {
-    options.dataset = dir.file(mode);
-    options.split = writeDataset(options.dataset, mode);
-    options.output_dir = dir.file(mode + "-out");
+  // View 0 of a dataset of one view is the cube corner (1, 1, 1) / sqrt(3), one diagonal out.
+  const std::string corner = std::to_string(1.0 / std::sqrt(3.0));
+  for (const auto& [name, mode, single] : {std::tuple<std::string, std::string, bool>{"nearest", "nearest", false},
+                                           {"stations", "visibility", false},
+                                           {"one-scanner", "visibility", true}}) {
+    options.dataset = dir.file(name);
+    options.split = writeDataset(options.dataset, mode, single);
+    options.output_dir = dir.file(name + "-out");
     const auto records = ev::readRecords(ev::runBenchmark(options).csv_path);
-    ASSERT_EQ(records.size(), 1u) << mode;
-    // View 0 of a dataset of one view is the cube corner (1, 1, 1) / sqrt(3), one diagonal out.
-    const std::string corner = std::to_string(1.0 / std::sqrt(3.0));
-    EXPECT_EQ(records[0].message, mode == "nearest" ? "none" : corner + " " + corner + " " + corner) << mode;
+    ASSERT_EQ(records.size(), 1u) << name;
+    EXPECT_EQ(records[0].message, single ? corner + " " + corner + " " + corner : "none") << name;
   }
-  // Nearest mode removed what a scanner at the viewpoint would have seen: asking for it is an error.
+  // Nearest mode removed what a scanner at the viewpoint would have seen, and other stations add
+  // what it could not see: asking for the scanner there is an error.
   options.method.use_scanner_position = true;
-  options.dataset = dir.file("nearest");
-  options.output_dir = dir.file("asked");
-  try {
-    ev::runBenchmark(options);
-    ADD_FAILURE() << "no error";
-  } catch (const paco::InvalidInputError& e) {
-    EXPECT_NE(std::string(e.what()).find("--mode visibility"), std::string::npos) << e.what();
+  for (const std::string name : {"nearest", "stations"}) {
+    options.dataset = dir.file(name);
+    options.output_dir = dir.file(name + "-asked");
+    try {
+      ev::runBenchmark(options);
+      ADD_FAILURE() << name << ": no error";
+    } catch (const paco::InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--mode visibility --single-scanner"), std::string::npos) << e.what();
+    }
   }
 }

@@ -74,8 +74,8 @@ EvaluationRecord evaluateCase(const data::Sample& sample, const SurfaceMesh& gt_
                               const data::DatasetInfo& info) {
   MethodInput in;
   in.input = sample.input;
-  // A visibility-mode input is what a scanner at the viewpoint saw (with one station, all of it).
-  if (info.mode == "visibility") in.scanner_position = sample.viewpoint * info.viewpoint_distance;
+  // With one scanner, an input is what the scanner at the viewpoint saw.
+  if (info.mode == "visibility" && info.single_scanner) in.scanner_position = sample.viewpoint * info.viewpoint_distance;
   if (options.drop_input_normals)
     for (auto& p : in.input) p.normal_x = p.normal_y = p.normal_z = 0.0f;
   in.input_labels = sample.input_labels;
@@ -130,11 +130,15 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
   checkOptions(options);
   const data::Split split = data::splitFromString(options.split);
   const data::Dataset dataset(options.dataset);
-  if (options.method.use_scanner_position && dataset.info().mode != "visibility")
-    throw InvalidInputError("dataset '" + options.dataset + "' was cut by distance from the viewpoint (" +
-                            dataset.info().mode + " mode), which removes the points nearest to it: a scanner " +
-                            "there would have seen them. The scanner's position needs a dataset built with " +
-                            "paco_dataset --mode visibility");
+  if (options.method.use_scanner_position && !(dataset.info().mode == "visibility" && dataset.info().single_scanner))
+    throw InvalidInputError(
+        "dataset '" + options.dataset + "' " +
+        (dataset.info().mode == "visibility"
+             ? std::string("adds what other stations saw to the scan from the viewpoint")
+             : "was cut by distance from the viewpoint (" + dataset.info().mode +
+                   " mode), which removes the points nearest to it: a scanner there would have seen them") +
+        ". The scanner's position needs inputs from one scanner: build the dataset with paco_dataset --mode "
+        "visibility --single-scanner");
 
   // Every sample of the split at the requested levels and views, in the dataset's order (by part).
   std::vector<std::size_t> indices;

@@ -32,7 +32,7 @@ struct MethodInput {
   std::vector<int> gt_labels;               ///< per GT point: index into gt_planes (oracle only)
   std::vector<Plane> gt_planes;             ///< the complete set of GT planes (oracle only)
   /// Where the scanner stood, in the input's frame, when known (a dataset built with
-  /// `--mode visibility`); used by paco with MethodOptions::use_scanner_position.
+  /// `--mode visibility --single-scanner`); used by paco with MethodOptions::use_scanner_position.
   std::optional<Eigen::Vector3d> scanner_position;
 };
 
