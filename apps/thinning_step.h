@@ -1,6 +1,6 @@
 #pragma once
-// The working cloud of paco_reconstruct and paco_complete: repeated points left out, dense scans
-// thinned.
+// The working cloud of paco_reconstruct and paco_complete (repeated and stray points left out,
+// dense scans thinned), and the options of that step and of the segmenter, which both tools share.
 #include "app_support.h"
 
 #include <paco/segmentation/planar_segmenter.h>
