@@ -266,19 +266,17 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
   // Positions are float32 points + coordinate_offset, the type PCL's point types and pcl_viewer
   // read ("F 8" fields load as zeros into pcl::PointXYZ): far coordinates lose precision here.
   const Eigen::Vector3d& offset = cloud.coordinate_offset;
-  const auto floats = [&](std::size_t i, float v[6]) {
+  // Float field k of point i (x y z, then the normal), each computed once: unshift formats text.
+  const auto field = [&](std::size_t i, std::size_t k) -> float {
     const pcl::PointNormal& p = cloud.points[i];
-    for (int k = 0; k < 3; ++k) v[k] = static_cast<float>(unshift(p.data[k], offset[k]));
-    v[3] = p.normal_x; v[4] = p.normal_y; v[5] = p.normal_z;
+    return k < 3 ? static_cast<float>(unshift(p.data[k], offset[static_cast<Eigen::Index>(k)])) : p.data_n[k - 3];
   };
-  float v[6];
   if (encoding == PcdEncoding::Ascii) {
     out += "ascii\n";
     for (std::size_t i = 0; i < n; ++i) {
-      floats(i, v);
       for (std::size_t k = 0; k < nfloat; ++k) {
         if (k) out += ' ';
-        appendFloat(out, v[k]);
+        appendFloat(out, field(i, k));
       }
       if (colours) {
         // PCL's ascii rgb is the float whose bits are the packed colour.
@@ -294,8 +292,7 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
     out += "binary\n";
     out.reserve(out.size() + n * nf * 4);
     for (std::size_t i = 0; i < n; ++i) {
-      floats(i, v);
-      for (std::size_t k = 0; k < nfloat; ++k) appendBinary(out, v[k]);
+      for (std::size_t k = 0; k < nfloat; ++k) appendBinary(out, field(i, k));
       if (colours) appendBinary(out, cloud.colours[i]);
       if (labels) appendBinary(out, static_cast<std::uint32_t>(cloud.labels[i]));
     }
@@ -304,10 +301,7 @@ std::string writePcd(const LabelledCloud& cloud, PcdEncoding encoding) {
     std::string soa;
     soa.reserve(n * nf * 4);
     for (std::size_t k = 0; k < nfloat; ++k)
-      for (std::size_t i = 0; i < n; ++i) {
-        floats(i, v);
-        appendBinary(soa, v[k]);
-      }
+      for (std::size_t i = 0; i < n; ++i) appendBinary(soa, field(i, k));
     if (colours)
       for (std::size_t i = 0; i < n; ++i) appendBinary(soa, cloud.colours[i]);
     if (labels)
