@@ -7,6 +7,8 @@
 
 #include "test_support.h"
 
+#include <string>
+
 namespace {
 
 using paco::test::TempDir;
@@ -29,14 +31,21 @@ paco::io::LabelledCloud makeCloud() {
   return c;
 }
 
+const paco::io::PcdEncoding kPcdEncodings[] = {paco::io::PcdEncoding::Ascii, paco::io::PcdEncoding::Binary,
+                                                paco::io::PcdEncoding::BinaryCompressed};
+
+void savePcd(const std::string& path, const paco::io::LabelledCloud& cloud, paco::io::PcdEncoding encoding) {
+  paco::io::CloudWriteOptions options;
+  options.pcd_encoding = encoding;
+  paco::io::saveCloud(path, cloud, options);
+}
+
 class PclInterop : public ::testing::TestWithParam<paco::io::PcdEncoding> {};
 
 TEST_P(PclInterop, PclReadsOurPcdAndWeReadPcls) {
   TempDir dir;
   const auto cloud = makeCloud();
-  paco::io::CloudWriteOptions options;
-  options.pcd_encoding = GetParam();
-  paco::io::saveCloud(dir.file("ours.pcd"), cloud, options);
+  savePcd(dir.file("ours.pcd"), cloud, GetParam());
   pcl::PointCloud<pcl::PointNormal> normals;
   pcl::PointCloud<pcl::PointXYZL> labelled;
   ASSERT_EQ(pcl::io::loadPCDFile(dir.file("ours.pcd"), normals), 0);
@@ -75,9 +84,7 @@ TEST_P(PclInterop, PclReadsOurPcdAndWeReadPcls) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllEncodings, PclInterop,
-                         ::testing::Values(paco::io::PcdEncoding::Ascii, paco::io::PcdEncoding::Binary,
-                                           paco::io::PcdEncoding::BinaryCompressed));
+INSTANTIATE_TEST_SUITE_P(AllEncodings, PclInterop, ::testing::ValuesIn(kPcdEncodings));
 
 }  // namespace
 
@@ -86,11 +93,8 @@ TEST(PclInteropColours, PclReadsOurRgbField) {
   auto cloud = makeCloud();
   for (std::size_t i = 0; i < cloud.points.size(); ++i)
     cloud.colours.push_back(static_cast<std::uint32_t>((i * 2654435761u) & 0xffffffu));
-  for (auto encoding : {paco::io::PcdEncoding::Ascii, paco::io::PcdEncoding::Binary,
-                        paco::io::PcdEncoding::BinaryCompressed}) {
-    paco::io::CloudWriteOptions options;
-    options.pcd_encoding = encoding;
-    paco::io::saveCloud(dir.file("rgb.pcd"), cloud, options);
+  for (const auto encoding : kPcdEncodings) {
+    savePcd(dir.file("rgb.pcd"), cloud, encoding);
     pcl::PointCloud<pcl::PointXYZRGBL> coloured;
     ASSERT_EQ(pcl::io::loadPCDFile(dir.file("rgb.pcd"), coloured), 0);
     ASSERT_EQ(coloured.size(), cloud.points.size());
@@ -113,11 +117,8 @@ TEST(PclInteropFarCoordinates, PclReadsOurPcdInTheFilesCoordinates) {
                                               "500012.12 5412353.81 103.5\n");
   const paco::io::LabelledCloud cloud = paco::io::loadCloud(dir.file("utm.xyz"));
   ASSERT_FALSE(cloud.coordinate_offset.isZero(0.0));
-  for (const auto encoding : {paco::io::PcdEncoding::Ascii, paco::io::PcdEncoding::Binary,
-                              paco::io::PcdEncoding::BinaryCompressed}) {
-    paco::io::CloudWriteOptions options;
-    options.pcd_encoding = encoding;
-    paco::io::saveCloud(dir.file("utm.pcd"), cloud, options);
+  for (const auto encoding : kPcdEncodings) {
+    savePcd(dir.file("utm.pcd"), cloud, encoding);
     pcl::PointCloud<pcl::PointXYZ> read;
     ASSERT_EQ(pcl::io::loadPCDFile(dir.file("utm.pcd"), read), 0);
     ASSERT_EQ(read.size(), 3u);
