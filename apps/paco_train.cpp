@@ -35,7 +35,8 @@ namespace {
 const char kTool[] = "paco_train";
 
 struct Options {
-  std::string dataset, output;
+  std::vector<std::string> datasets;
+  std::string output;
   std::string preset = "cpu";
   std::string config_file;
   int epochs = 100;
@@ -92,9 +93,10 @@ class NewFolderCleanup {
 };
 
 void printHelp(const po::options_description& visible) {
-  std::cout << "Usage: " << kTool << " DATASET_DIR -o CHECKPOINT_DIR [options]\n"
+  std::cout << "Usage: " << kTool << " DATASET_DIR... -o CHECKPOINT_DIR [options]\n"
             << "       " << kTool << " --export CHECKPOINT -o MODEL.pt   (the network alone, for paco_reconstruct)\n\n"
-            << "Trains the PaCo network on a dataset folder written by paco_dataset. Writes\n"
+            << "Trains the PaCo network on dataset folders written by paco_dataset (several: their\n"
+            << "samples are used together, e.g. inputs cut by distance and inputs seen by one scanner). Writes\n"
             << "CHECKPOINT_DIR/last.pt (every epoch, and on Ctrl-C), CHECKPOINT_DIR/best.pt (lowest\n"
             << "validation loss) and CHECKPOINT_DIR/training_log.csv (one row per epoch). Ctrl-C saves\n"
             << "the state and stops; run again with --resume to continue exactly where it stopped.\n"
@@ -159,9 +161,9 @@ int run(int argc, char** argv) {
        "also save last.pt every N steps inside an epoch (0 = only at epoch ends), so a killed run loses little")
       ("quiet", po::bool_switch(&o.quiet), "no progress bars");
   po::options_description all;
-  all.add(visible).add_options()("dataset", po::value(&o.dataset));
+  all.add(visible).add_options()("dataset", po::value(&o.datasets)->multitoken());
   po::positional_options_description positional;
-  positional.add("dataset", 1);
+  positional.add("dataset", -1);
   const po::variables_map vm = paco::app::parseCommandLine(argc, argv, all, positional);
   if (vm.count("help")) {
     printHelp(visible);
@@ -171,7 +173,7 @@ int run(int argc, char** argv) {
     if (o.output.empty()) throw paco::app::UsageError("--export needs -o MODEL.pt");
     return exportModel(o);
   }
-  if (o.dataset.empty()) throw paco::app::UsageError("expected DATASET_DIR (a folder written by paco_dataset)");
+  if (o.datasets.empty()) throw paco::app::UsageError("expected DATASET_DIR (a folder written by paco_dataset)");
   if (o.output.empty()) throw paco::app::UsageError("expected -o CHECKPOINT_DIR");
   paco::app::validateThreads("--threads", o.threads);
   if (o.epochs < 0) throw paco::app::UsageError("--epochs must be >= 0, got " + std::to_string(o.epochs));
@@ -241,7 +243,8 @@ int run(int argc, char** argv) {
   if (orientation != "as-is" && o.input_frame != "own")
     throw paco::app::UsageError("input orientation '" + orientation + "' needs --input-frame own");
 
-  auto dataset = std::make_shared<const paco::data::Dataset>(o.dataset);
+  std::vector<std::shared_ptr<const paco::data::Dataset>> datasets;
+  for (const auto& folder : o.datasets) datasets.push_back(std::make_shared<const paco::data::Dataset>(folder));
   paco::completion::CollateOptions collate;
   collate.input_points = o.input_points;
   collate.gt_points = o.gt_points;
@@ -251,10 +254,11 @@ int run(int argc, char** argv) {
   train_collate.augment_scale = o.augment_scale;
   train_collate.augment_offset = o.augment_offset;
   train_collate.augment_jitter = o.augment_jitter;
-  const auto train = paco::completion::datasetSource(dataset, paco::data::Split::Train, train_collate, o.limit_train);
-  const auto val = paco::completion::datasetSource(dataset, paco::data::Split::Val, collate, o.limit_val);
+  const auto train = paco::completion::datasetSource(datasets, paco::data::Split::Train, train_collate, o.limit_train);
+  const auto val = paco::completion::datasetSource(datasets, paco::data::Split::Val, collate, o.limit_val);
   if (train.size == 0)
-    throw paco::InvalidInputError("dataset '" + o.dataset + "' has no training samples; build a larger one with paco_dataset");
+    throw paco::InvalidInputError(std::string(o.datasets.size() == 1 ? "dataset '" + o.datasets[0] + "' has" : "the datasets have") +
+                                  " no training samples; build a larger one with paco_dataset");
 
   const NewFolderCleanup cleanup(o.output);  // the trainer creates the folder
   paco::completion::Trainer trainer(options);
@@ -273,7 +277,10 @@ int run(int argc, char** argv) {
   }
   std::int64_t parameters = 0;
   for (const auto& p : trainer.network()->parameters()) parameters += p.numel();
-  std::printf("dataset '%s': %zu training, %zu validation samples\n", o.dataset.c_str(), train.size, val.size);
+  for (const auto& dataset : datasets)
+    std::printf("dataset '%s': %zu training, %zu validation samples\n", dataset->folder().c_str(),
+                dataset->size(paco::data::Split::Train), dataset->size(paco::data::Split::Val));
+  std::printf("used: %zu training, %zu validation samples\n", train.size, val.size);
   std::printf("network '%s': %.2f M parameters; batch %d, lr %g, %d threads, input frame %s, orientation %s\n",
               trainer.options().model.name.c_str(), parameters / 1e6, trainer.options().batch_size, o.lr, o.threads,
               o.input_frame.c_str(), trainer.options().model.input_orientation.c_str());

@@ -5,7 +5,7 @@
 #
 #   scripts/train-model.sh WORK_DIR [--init-from MODEL.pt] [--epochs N] [--seed S] [--jitter J]
 #                          [--orientation as-is|seen-planes] [--segment-min-points N]
-#                          [--segment-min-parallel-points N] [--run NAME]
+#                          [--segment-min-parallel-points N] [--single-scanner-views N] [--run NAME]
 #                          [-- PACO_TRAIN_OPTIONS...]
 #
 # --init-from starts a new run from a model's weights (e.g. models/paco_cpu.pt, to go on training
@@ -19,7 +19,10 @@
 # N > 0 uses planes of N points, into WORK_DIR/data_minN (the models up to the eleventh session's
 # were trained on --segment-min-points 50). --segment-min-parallel-points is paco_dataset's too:
 # N >= 0 also labels small planes parallel to a larger one (0: 0.5 % of the points, as the tools
-# do by default), into a folder with the suffix _parN; the default, -1, labels none. Options
+# do by default), into a folder with the suffix _parN; the default, -1, labels none.
+# --single-scanner-views N > 0 also trains on what one scanner sees from each of N viewpoints
+# (paco_dataset --mode visibility --single-scanner, the part at the 25 % level, labelled the same
+# way), built into WORK_DIR/data_1scan (with the same suffixes). Options
 # after "--" go to paco_train as they are (e.g. --quality-classification --lr 5e-5
 # --limit-train 16000); pass them again when resuming.
 # Needs the MFCAD meshes in ../shared/data/mfcad (or MFCAD_DIR) and a Release build in build/.
@@ -40,6 +43,7 @@ orientation=""
 run_name=run
 segment_min_points=0
 segment_min_parallel_points=-1
+single_scanner_views=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --init-from) init_from=$2; shift 2 ;;
@@ -50,6 +54,7 @@ while [ $# -gt 0 ]; do
     --run) run_name=$2; shift 2 ;;
     --segment-min-points) segment_min_points=$2; shift 2 ;;
     --segment-min-parallel-points) segment_min_parallel_points=$2; shift 2 ;;
+    --single-scanner-views) single_scanner_views=$2; shift 2 ;;
     --) shift; break ;;
     *) echo "train-model.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
@@ -84,15 +89,25 @@ echo "train-model.sh: $(ls "$subset" | wc -l) meshes in the training subset"
 
 # Anisotropic scale 0.5-2 and rotation per part, 3 levels x 4 views, inputs labelled by GoCoPP
 # (the segmenter the pipeline uses). About 5 min on 2 cores.
-data="$work/data"
-if [ "$segment_min_points" != 0 ]; then data="$work/data_min$segment_min_points"; fi
-if [ "$segment_min_parallel_points" -ge 0 ]; then data="${data}_par$segment_min_parallel_points"; fi
-build/apps/paco_dataset "$subset" "$data" --augment-scale 0.5,2 --augment-rotate --segment \
-  --segment-min-points "$segment_min_points" --segment-min-parallel-points "$segment_min_parallel_points" \
+suffix=""
+if [ "$segment_min_points" != 0 ]; then suffix="_min$segment_min_points"; fi
+if [ "$segment_min_parallel_points" -ge 0 ]; then suffix="${suffix}_par$segment_min_parallel_points"; fi
+labels=(--segment --segment-min-points "$segment_min_points" --segment-min-parallel-points "$segment_min_parallel_points")
+data="$work/data$suffix"
+build/apps/paco_dataset "$subset" "$data" --augment-scale 0.5,2 --augment-rotate "${labels[@]}" \
   --views 4 --jobs 2 --seed 1
+datasets=("$data")
+# One scanner's view of each part, level 0 only (a single scanner hides 45-66 % of an MFCAD part,
+# so the 25 % level keeps all it sees). About 4 min on 2 cores for 4 views.
+if [ "$single_scanner_views" -gt 0 ]; then
+  single="$work/data_1scan$suffix"
+  build/apps/paco_dataset "$subset" "$single" --mode visibility --single-scanner --levels 0 \
+    --views "$single_scanner_views" --augment-scale 0.5,2 --augment-rotate "${labels[@]}" --jobs 2 --seed 1
+  datasets+=("$single")
+fi
 
 run="$work/$run_name"
-args=("$data" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 --augment-offset 0.05
+args=("${datasets[@]}" -o "$run" --preset cpu --input-frame own --augment-scale 0.2 --augment-offset 0.05
       --augment-jitter "$jitter" --limit-val 480 --epochs "$epochs" --threads 2 --seed "$seed" --checkpoint-every 100)
 if [ -n "$orientation" ]; then
   args+=(--input-orientation "$orientation")

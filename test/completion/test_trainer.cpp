@@ -13,6 +13,7 @@
 #include <limits>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 
 using namespace paco::completion;
 
@@ -363,11 +364,11 @@ TEST(Trainer, EpochOrderIsASeededPermutation) {
 #if PACO_HAVE_DATA
 #include <paco/data/builder.h>
 
-TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
-  const std::string tool = paco::test::toolPath("paco_train");
-  if (!std::filesystem::exists(tool)) GTEST_SKIP() << "paco_train is not built";
-  paco::test::TempDir dir;
-  // A tiny dataset of test shapes: 3 training parts and 1 validation part (split by name hash).
+namespace {
+
+// A tiny dataset of test shapes named PREFIX-i: `train_parts` training parts and one validation
+// part (split by name hash), 2 views of one level each.
+void writeTinyDataset(const std::string& folder, const std::string& prefix, int train_parts) {
   paco::data::BuildOptions build;
   build.info.levels = {0};
   build.info.views = 2;
@@ -375,19 +376,59 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
   build.info.gt_points = 512;
   build.info.dense_points = 2048;
   build.info.source = "test shapes";
-  paco::data::DatasetWriter writer(dir.file("data"), build.info);
-  int train_parts = 0, val_parts = 0;
-  for (int i = 0; i < 200 && (train_parts < 3 || val_parts < 1); ++i) {
-    const std::string name = "shape-" + std::to_string(i);
+  paco::data::DatasetWriter writer(folder, build.info);
+  int trained = 0, validated = 0;
+  for (int i = 0; i < 200 && (trained < train_parts || validated < 1); ++i) {
+    const std::string name = prefix + "-" + std::to_string(i);
     const auto split = paco::data::splitOf(name);
-    if (split == paco::data::Split::Test || (split == paco::data::Split::Train && train_parts >= 3) ||
-        (split == paco::data::Split::Val && val_parts >= 1))
+    if (split == paco::data::Split::Test || (split == paco::data::Split::Train && trained >= train_parts) ||
+        (split == paco::data::Split::Val && validated >= 1))
       continue;
-    (split == paco::data::Split::Train ? train_parts : val_parts)++;
+    (split == paco::data::Split::Train ? trained : validated)++;
     writer.write(paco::data::buildPart(name, shape(i), build));
   }
-  ASSERT_EQ(train_parts, 3);
-  ASSERT_EQ(val_parts, 1);
+  ASSERT_EQ(trained, train_parts);
+  ASSERT_EQ(validated, 1);
+}
+
+}  // namespace
+
+TEST(Trainer, ADatasetSourceOverSeveralDatasetsTakesEachDatasetsSamplesAndSpreadsALimit) {
+  paco::test::TempDir dir;
+  writeTinyDataset(dir.file("a"), "a", 2);
+  writeTinyDataset(dir.file("b"), "b", 3);
+  const std::vector<std::shared_ptr<const paco::data::Dataset>> datasets{
+      std::make_shared<const paco::data::Dataset>(dir.file("a")),
+      std::make_shared<const paco::data::Dataset>(dir.file("b"))};
+  CollateOptions options;
+  options.input_points = 256;
+  options.gt_points = 512;
+  const BatchSource both = datasetSource(datasets, paco::data::Split::Train, options);
+  ASSERT_EQ(both.size, 10u);  // 2 views of 2 parts, then of 3 parts
+  std::vector<std::size_t> all(both.size);
+  std::iota(all.begin(), all.end(), 0);
+  const TrainingBatch batch = both.load(all, 1);
+  ASSERT_EQ(batch.size(), 10);
+  for (int i = 0; i < 10; ++i)
+    EXPECT_EQ(batch.parts[i].substr(0, 2), i < 4 ? "a-" : "b-") << i << ": " << batch.parts[i];
+  // A limit of 2 takes samples 0 and 5: one from each dataset.
+  const BatchSource limited = datasetSource(datasets, paco::data::Split::Train, options, 2);
+  ASSERT_EQ(limited.size, 2u);
+  const TrainingBatch two = limited.load({0, 1}, 1);
+  EXPECT_EQ(two.parts[0].substr(0, 2), "a-");
+  EXPECT_EQ(two.parts[1].substr(0, 2), "b-");
+  // Validation: one part with 2 views in each.
+  EXPECT_EQ(datasetSource(datasets, paco::data::Split::Val, options).size, 4u);
+  // One dataset alone is the same as the single-dataset source.
+  EXPECT_EQ(datasetSource(datasets[1], paco::data::Split::Train, options).size, 6u);
+}
+
+TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
+  const std::string tool = paco::test::toolPath("paco_train");
+  if (!std::filesystem::exists(tool)) GTEST_SKIP() << "paco_train is not built";
+  paco::test::TempDir dir;
+  // 3 training parts and 1 validation part.
+  writeTinyDataset(dir.file("data"), "shape", 3);
   {
     std::ofstream config(dir.file("tiny.json"));
     config << tinyConfig().toJson();
@@ -433,5 +474,14 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
   EXPECT_NE(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") +
                                    " --disable-loss chamfer", &output), 0);
   EXPECT_NE(output.find("known terms"), std::string::npos) << output;
+  // Several datasets are trained on together.
+  writeTinyDataset(dir.file("more"), "more", 2);
+  ASSERT_EQ(paco::test::runCommand(tool + " " + dir.file("data") + " " + dir.file("more") + " -o " + dir.file("run4") +
+                                       " --config " + dir.file("tiny.json") +
+                                       " --batch 2 --threads 1 --input-points 256 --gt-points 512 --quiet --epochs 1",
+                                   &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("used: 10 training, 4 validation samples"), std::string::npos) << output;
 }
 #endif

@@ -22,6 +22,7 @@
 #include <random>
 #include <sstream>
 #include <thread>
+#include <utility>
 
 namespace paco::completion {
 namespace {
@@ -489,17 +490,33 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
 #if PACO_HAVE_DATA
 BatchSource datasetSource(std::shared_ptr<const paco::data::Dataset> dataset, paco::data::Split split,
                           const CollateOptions& options, std::size_t limit) {
-  const std::size_t total = dataset->size(split);
+  return datasetSource(std::vector<std::shared_ptr<const paco::data::Dataset>>{std::move(dataset)}, split, options,
+                       limit);
+}
+
+BatchSource datasetSource(std::vector<std::shared_ptr<const paco::data::Dataset>> datasets, paco::data::Split split,
+                          const CollateOptions& options, std::size_t limit) {
+  // (dataset, sample) of each position of the concatenation.
+  std::vector<std::pair<std::size_t, std::size_t>> all;
+  for (std::size_t d = 0; d < datasets.size(); ++d) {
+    if (!datasets[d]) throw paco::InvalidInputError("datasetSource: dataset " + std::to_string(d) + " is null");
+    for (std::size_t i = 0; i < datasets[d]->size(split); ++i) all.emplace_back(d, i);
+  }
+  const std::size_t total = all.size();
   const std::size_t count = limit > 0 ? std::min(limit, total) : total;
   // A limited source takes evenly spaced samples, so it still covers many parts.
-  std::vector<std::size_t> chosen(count);
-  for (std::size_t i = 0; i < count; ++i) chosen[i] = count == total ? i : i * total / count;
+  std::vector<std::pair<std::size_t, std::size_t>> chosen(count);
+  for (std::size_t i = 0; i < count; ++i) chosen[i] = all[count == total ? i : i * total / count];
   BatchSource source;
   source.size = count;
-  source.load = [dataset, split, options, chosen](const std::vector<std::size_t>& indices, std::uint64_t seed) {
+  source.load = [datasets = std::move(datasets), split, options, chosen = std::move(chosen)](
+                    const std::vector<std::size_t>& indices, std::uint64_t seed) {
     std::vector<paco::data::Sample> samples;
     samples.reserve(indices.size());
-    for (std::size_t i : indices) samples.push_back(dataset->load(split, chosen.at(i)));
+    for (std::size_t i : indices) {
+      const auto& [d, sample] = chosen.at(i);
+      samples.push_back(datasets[d]->load(split, sample));
+    }
     return collate(samples, options, seed);
   };
   return source;
