@@ -26,6 +26,42 @@ TEST(ChildProcess, AnAbortFailsTheCallNotTheCaller) {
   EXPECT_NE(r.error.find("signal 6"), std::string::npos) << r.error;
 }
 
+// COIN-OR Clp's failed assertion is written to stderr just before the abort. The caller's user
+// should read it in the error, not as a stray line that looks as if the whole program crashed.
+TEST(ChildProcess, TheLastLineACrashingChildWroteEndsTheErrorAndIsNotPrinted) {
+  testing::internal::CaptureStderr();
+  const paco::ChildProcessResult r = paco::runInChildProcess(
+      []() -> std::string {
+        std::fputs("solver: starting\n", stderr);
+        std::fputs("solver: lib.cpp:12: Assertion `a <= b' failed.\n", stderr);
+        std::abort();
+      },
+      30.0);
+  const std::string printed = testing::internal::GetCapturedStderr();
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.error, "the child process was killed by signal 6 (Aborted) after writing \"solver: lib.cpp:12: "
+                     "Assertion `a <= b' failed.\"");
+  EXPECT_EQ(r.error_output, "solver: starting\nsolver: lib.cpp:12: Assertion `a <= b' failed.\n");
+  EXPECT_EQ(printed, "");
+}
+
+TEST(ChildProcess, WhatASucceedingChildWritesToStderrIsPassedOn) {
+  const std::string many_lines(100000, '.');  // more than a pipe holds: read while the child runs
+  testing::internal::CaptureStderr();
+  const paco::ChildProcessResult r = paco::runInChildProcess(
+      [&] {
+        std::fputs("solver: a warning\n", stderr);
+        std::fputs(many_lines.c_str(), stderr);
+        return std::string("solved");
+      },
+      30.0);
+  const std::string printed = testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(r.output, "solved");
+  EXPECT_EQ(printed, "solver: a warning\n" + many_lines);
+  EXPECT_EQ(r.error_output, printed.substr(printed.size() - 16384));  // the last 16 KB
+}
+
 TEST(ChildProcess, AnExceptionBecomesTheError) {
   const paco::ChildProcessResult r =
       paco::runInChildProcess([]() -> std::string { throw std::runtime_error("degenerate program"); }, 30.0);

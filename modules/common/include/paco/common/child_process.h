@@ -1,7 +1,7 @@
 #pragma once
 // Usage:
 //   paco::ChildProcessResult r = paco::runInChildProcess([&] { return solveAndSerialise(); }, 60.0);
-//   if (!r.ok) fail(r.error);            // e.g. "killed by signal 6 (Aborted)"
+//   if (!r.ok) fail(r.error);            // e.g. "killed by signal 6 (Aborted) after writing \"...\""
 //   use(r.output);
 //
 // Runs work that may abort the whole process (a third-party solver's failed assertion, as COIN-OR
@@ -18,6 +18,11 @@ struct ChildProcessResult {
   std::string error;         ///< why not ok: the work's exception, the signal that killed it, ...
   bool timed_out = false;    ///< killed after `timeout_seconds`
   bool interrupted = false;  ///< killed because paco::interruptRequested() became true
+  /// The last 16 KB the work wrote to stderr, held back until the child ended (anything before
+  /// them went on to the caller's stderr as it came). When the child crashed, their last line ends
+  /// `error` (a solver's failed assertion, say); otherwise they are passed on to the caller's
+  /// stderr too, as if the work had run in the caller.
+  std::string error_output;
 };
 
 /// Forks; the child runs `work` and sends its result back, the parent waits for it (at most
