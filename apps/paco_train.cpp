@@ -268,6 +268,10 @@ int run(int argc, char** argv) {
     trainer.resume(last.string());
     std::printf("resumed '%s': epoch %d, step %lld\n", last.string().c_str(), trainer.epoch(),
                 static_cast<long long>(trainer.globalStep()));
+    if (trainer.trainSamples() != 0 && trainer.trainSamples() != train.size)
+      std::printf("note: the run had %zu training samples per epoch and this command gives %zu, so its data order "
+                  "changes from here; to continue exactly, pass the run's datasets and --limit-train\n",
+                  trainer.trainSamples(), train.size);
   } else if (initial_model) {
     if (vm.count("config") || !vm["preset"].defaulted())
       std::printf("note: --init-from uses the network configuration stored in '%s'; --preset/--config ignored\n",

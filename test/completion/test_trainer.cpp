@@ -247,6 +247,7 @@ TEST(Trainer, ResumeContinuesExactlyAsAnUninterruptedRun) {
   EXPECT_EQ(second.epoch(), 1);
   EXPECT_EQ(second.epochBatch(), 1u);
   EXPECT_EQ(second.globalStep(), 4);
+  EXPECT_EQ(second.trainSamples(), 6u);
   const auto records = second.fit(train, val);
   ASSERT_EQ(records.size(), 1u);
   EXPECT_EQ(second.globalStep(), 6);
@@ -445,6 +446,7 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
   EXPECT_NE(output.find("--resume"), std::string::npos) << output;
   ASSERT_EQ(paco::test::runCommand(base + " --epochs 2 --resume", &output), 0) << output;
   EXPECT_NE(output.find("resumed"), std::string::npos) << output;
+  EXPECT_EQ(output.find("training samples per epoch"), std::string::npos) << output;  // the same data
   std::ifstream csv(dir.file("run") + "/training_log.csv");
   std::string line;
   int rows = -1;  // header
@@ -483,5 +485,13 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
             0)
       << output;
   EXPECT_NE(output.find("used: 10 training, 4 validation samples"), std::string::npos) << output;
+  // Resuming that run with one of its datasets left out says the data order changes.
+  ASSERT_EQ(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("run4") +
+                                       " --batch 2 --threads 1 --input-points 256 --gt-points 512 --quiet --epochs 2 --resume",
+                                   &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("the run had 10 training samples per epoch and this command gives 6"), std::string::npos)
+      << output;
 }
 #endif

@@ -246,6 +246,7 @@ void Trainer::saveCheckpoint(const std::string& path) {
   state.write("trainer_epoch", scalarTensor(static_cast<std::int64_t>(epoch_)));
   state.write("trainer_epoch_batch", scalarTensor(static_cast<std::int64_t>(epoch_batch_)));
   state.write("trainer_step", scalarTensor(step_));
+  state.write("trainer_train_samples", scalarTensor(static_cast<std::int64_t>(train_samples_)));
   state.write("trainer_seed", scalarTensor(static_cast<std::int64_t>(options_.seed)));
   state.write("trainer_batch_size", scalarTensor(static_cast<std::int64_t>(options_.batch_size)));
   state.write("trainer_best_val", scalarTensor(has_best_ ? best_val_ : std::numeric_limits<double>::quiet_NaN()));
@@ -304,6 +305,8 @@ void Trainer::resume(const std::string& checkpoint_path) {
     epoch_batch_ = static_cast<std::size_t>(t.item<std::int64_t>());
     read("trainer_step");
     step_ = t.item<std::int64_t>();
+    t = torch::Tensor();
+    train_samples_ = state.try_read("trainer_train_samples", t) ? static_cast<std::size_t>(t.item<std::int64_t>()) : 0;
     read("trainer_seed");
     options_.seed = static_cast<std::uint64_t>(t.item<std::int64_t>());
     read("trainer_batch_size");
@@ -362,6 +365,7 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
   if (train.size == 0 || !train.load)
     throw InvalidInputError("Trainer::fit: no training samples; check the dataset folder and --limit-train");
   interrupted_ = false;
+  train_samples_ = train.size;
   const auto B = static_cast<std::size_t>(options_.batch_size);
   const std::size_t batches_per_epoch = (train.size + B - 1) / B;
   const std::string folder = options_.checkpoint_dir;

@@ -123,6 +123,9 @@ class Trainer {
   int epoch() const { return epoch_; }              ///< finished epochs
   std::int64_t globalStep() const { return step_; } ///< optimisation steps done
   std::size_t epochBatch() const { return epoch_batch_; }  ///< batches done in the current epoch
+  /// Training samples per epoch of the run: set by fit(), read back by resume() (0 from a
+  /// checkpoint older than this field). A resumed run continues exactly only with as many.
+  std::size_t trainSamples() const { return train_samples_; }
   double bestValidationLoss() const { return best_val_; }
   /// The scheduled learning rate of an epoch (0-based epoch index).
   double learningRateAt(int epoch) const;
@@ -140,6 +143,7 @@ class Trainer {
   std::unique_ptr<torch::optim::AdamW> optimizer_;
   int epoch_ = 0;
   std::size_t epoch_batch_ = 0;
+  std::size_t train_samples_ = 0;
   std::int64_t step_ = 0;
   double best_val_ = 0.0;
   bool has_best_ = false;
