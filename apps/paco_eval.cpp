@@ -18,6 +18,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -63,12 +64,14 @@ struct Options {
   bool no_normals = false;
   bool known_extent_oracle = false;
   bool scanner_at_viewpoint = false;
+  std::vector<std::string> compare;
 };
 
 void printHelp(const po::options_description& visible) {
   std::cout << "Usage:\n"
             << "  " << kTool << " --pred MESH --gt MESH [--input SCAN]  metrics of one mesh\n"
-            << "  " << kTool << " --dataset DIR -o OUT_DIR [options]      evaluate methods on a dataset split\n\n"
+            << "  " << kTool << " --dataset DIR -o OUT_DIR [options]      evaluate methods on a dataset split\n"
+            << "  " << kTool << " --compare BEFORE AFTER                  compare two dataset-mode runs case by case\n\n"
             << "Single mode prints CD, HD (both x 100, in the GT's normalised frame of unit bounding-box\n"
             << "diagonal), NC, #f, #v, whether the prediction is a closed solid and its volume / the GT's;\n"
             << "with --input, GT->pred also over the GT surface the scan saw and the surface it did not.\n"
@@ -78,6 +81,9 @@ void printHelp(const po::options_description& visible) {
             << "throws; it is then scored as the failure box. Methods: direct, oracle, oracle-seen-hull,\n"
             << "poisson-qem, box-prior, sanity (every case scored as failed), paco (when the learned\n"
             << "stages are built).\n"
+            << "--compare reads two eval.csv files (or the folders that hold them) and prints, per method,\n"
+            << "assembler and level, the means of CD, HD, NC and NC_prim in each run and the mean of the\n"
+            << "paired differences with its standard error, over the cases both runs have.\n"
             << "Available in this build: " << boost::algorithm::join(ev::availableMethods(), ", ") << "\n\n"
             << visible << std::endl;
 }
@@ -182,6 +188,40 @@ int single(const Options& o) {
   return 0;
 }
 
+// An eval.csv, or the folder paco_eval wrote it into.
+std::string evaluationCsv(const std::string& path) {
+  return std::filesystem::is_directory(path) ? (std::filesystem::path(path) / "eval.csv").string() : path;
+}
+
+int compare(const Options& o) {
+  if (o.compare.size() != 2)
+    throw paco::app::UsageError("--compare takes two runs, BEFORE and AFTER (eval.csv files or the folders that "
+                                "hold them), got " + std::to_string(o.compare.size()));
+  std::vector<std::vector<ev::EvaluationRecord>> runs;
+  for (const auto& given : o.compare) {
+    const std::string path = evaluationCsv(given);
+    if (!std::filesystem::is_regular_file(path))
+      throw paco::IoError("no evaluation results at '" + path + "'; give an eval.csv written by paco_eval --dataset, "
+                          "or its output folder");
+    std::size_t skipped = 0;
+    try {
+      runs.push_back(ev::readRecords(path, &skipped));
+    } catch (const paco::IoError&) {  // the header is not ours; its message is worded for a resumed run
+      throw paco::IoError("'" + path + "' is not an eval.csv of this version of paco_eval (its header differs); give "
+                          "the eval.csv of a paco_eval --dataset run");
+    }
+    if (runs.back().empty()) throw paco::InvalidInputError("'" + path + "' holds no evaluated case");
+    if (skipped > 0)
+      std::fprintf(stderr, "%s: note: skipped %zu incomplete or malformed lines of '%s'\n", kTool, skipped, path.c_str());
+  }
+  const auto comparisons = ev::comparePaired(runs[0], runs[1]);
+  if (comparisons.empty())
+    throw paco::InvalidInputError("the two runs have no case in common (the same method, assembler, part, level and "
+                                  "view); compare runs of the same dataset and methods");
+  std::cout << ev::markdownComparison(comparisons, o.compare[0], o.compare[1]);
+  return 0;
+}
+
 int dataset(const Options& o) {
   if (o.output_dir.empty()) throw paco::app::UsageError("dataset mode needs an output folder: -o OUT_DIR");
   ev::BenchmarkOptions b;
@@ -278,6 +318,8 @@ int run(int argc, char** argv) {
       ("score-failure", po::bool_switch(&o.score_failure), "with --gt only: print what a failed case scores (the failure box) and the sampling floor (the GT against itself)")
       ("same-seed", po::bool_switch(&o.same_seed), "single mode: sample both meshes with the same seed (a mesh against itself scores exactly 0)")
       ("dataset", po::value(&o.dataset), "dataset mode: folder written by paco_dataset")
+      ("compare", po::value(&o.compare)->multitoken(),
+       "compare two dataset-mode runs case by case: --compare BEFORE AFTER (eval.csv files or their folders)")
       ("split", po::value(&o.split)->default_value(o.split), "train, val or test")
       ("methods", po::value(&o.methods)->default_value(o.methods), "comma-separated: direct, oracle, oracle-seen-hull, poisson-qem, box-prior, sanity, paco")
       ("assemblers", po::value(&o.assemblers)->default_value(o.assemblers), "comma-separated: polyfit, cell-complex")
@@ -332,6 +374,11 @@ int run(int argc, char** argv) {
   if (o.samples < 1) throw paco::app::UsageError("--samples must be at least 1");
   const bool single_mode = !o.pred.empty() || !o.gt.empty() || !o.input.empty();
   if (single_mode && !o.dataset.empty()) throw paco::app::UsageError("give either --pred/--gt or --dataset, not both");
+  if (!o.compare.empty()) {
+    if (single_mode || !o.dataset.empty() || o.score_failure)
+      throw paco::app::UsageError("--compare reads two finished runs; it takes no --pred, --gt, --input or --dataset");
+    return compare(o);
+  }
   if (o.score_failure) {
     if (o.gt.empty() || !o.pred.empty() || !o.dataset.empty())
       throw paco::app::UsageError("--score-failure takes --gt MESH only");

@@ -1,4 +1,5 @@
 // paco_eval single mode on good and bad input.
+#include <paco/evaluation/report.h>
 #include <paco/io/mesh_io.h>
 
 #include <shapes.h>
@@ -7,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -136,4 +138,55 @@ TEST(PacoEvalTool, SingleModeRejectsBadInput) {
         << weights << ": " << out;
     EXPECT_NE(out.find("must be >= 0 and not all 0"), std::string::npos) << out;
   }
+}
+
+TEST(PacoEvalTool, CompareReportsThePairedDifferencesOfTwoRuns) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_eval is not built";
+  paco::test::TempDir dir;
+  auto write = [&](const std::string& path, const std::vector<std::pair<std::string, double>>& chamfers) {
+    std::ofstream out(path);
+    out << paco::evaluation::csvHeader() << "\n";
+    for (const auto& [part, cd] : chamfers) {
+      paco::evaluation::EvaluationRecord r;
+      r.method = "direct";
+      r.assembler = "polyfit";
+      r.part = part;
+      r.chamfer = cd;
+      r.hausdorff = 10.0 * cd;
+      r.normal_consistency = 0.9;
+      paco::evaluation::appendRecord(out, r);
+    }
+  };
+  std::filesystem::create_directories(dir.file("before"));
+  write(dir.file("before") + "/eval.csv", {{"a", 2.0}, {"b", 4.0}});
+  write(dir.file("after.csv"), {{"a", 3.0}, {"b", 4.0}});
+  const std::string tool = paco::test::toolPath("paco_eval");
+  std::string out;
+  // A run folder and a CSV file are both accepted.
+  ASSERT_EQ(paco::test::runCommand(tool + " --compare " + quoted(dir.file("before")) + " " + quoted(dir.file("after.csv")), &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("| direct | polyfit | 0 | 2 | 0 -> 0 | 3.000 -> 3.500 (+0.500 ± 0.500) | 30.00 -> 35.00 (+5.00 ± 5.00) |"),
+            std::string::npos)
+      << out;
+  // Bad input: one run, a missing run, a file that is not an eval.csv, runs with no case in common.
+  EXPECT_EQ(paco::test::runCommand(tool + " --compare " + quoted(dir.file("after.csv")), &out), 2) << out;
+  EXPECT_NE(out.find("takes two runs"), std::string::npos) << out;
+  EXPECT_EQ(paco::test::runCommand(tool + " --compare " + quoted(dir.file("after.csv")) + " " + quoted(dir.file("none")), &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("no evaluation results"), std::string::npos) << out;
+  {
+    std::ofstream other(dir.file("other.csv"));
+    other << "x,y\n1,2\n";
+  }
+  EXPECT_EQ(paco::test::runCommand(tool + " --compare " + quoted(dir.file("other.csv")) + " " + quoted(dir.file("after.csv")), &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("is not an eval.csv"), std::string::npos) << out;
+  write(dir.file("elsewhere.csv"), {{"c", 1.0}});
+  EXPECT_EQ(paco::test::runCommand(tool + " --compare " + quoted(dir.file("elsewhere.csv")) + " " + quoted(dir.file("after.csv")), &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("no case in common"), std::string::npos) << out;
 }

@@ -219,3 +219,87 @@ TEST(Markdown, LatencyTableHasMedianAndNinetiethPercentile) {
       << section;
   EXPECT_EQ(section.find("| sanity"), std::string::npos);  // nothing ran: no latency
 }
+
+namespace {
+
+ev::EvaluationRecord pairedCase(const std::string& part, int level, double cd, double hd, double nc, double nc_prim,
+                                bool failed = false) {
+  ev::EvaluationRecord r;
+  r.method = "paco";
+  r.assembler = "polyfit";
+  r.part = part;
+  r.level = level;
+  r.chamfer = cd;
+  r.hausdorff = hd;
+  r.normal_consistency = nc;
+  r.nc_prim = nc_prim;
+  if (failed) r.reason = ev::FailureReason::NoMesh;
+  return r;
+}
+
+}  // namespace
+
+TEST(PairedComparison, DifferencesAndStandardErrorsAreTheHandComputedOnes) {
+  // Level 0: CD 2 -> 3 and 4 -> 4 (differences +1 and 0); level 1: CD 5 -> 3 (-2), failed after.
+  // Part "x" is in the first run only, part "y" in the second only; part "z" has no NC_prim after.
+  const std::vector<ev::EvaluationRecord> before = {
+      pairedCase("a", 0, 2.0, 10.0, 0.8, 0.5), pairedCase("b", 0, 4.0, 12.0, 0.9, 0.7),
+      pairedCase("c", 1, 5.0, 20.0, 0.7, 0.4), pairedCase("x", 0, 1.0, 1.0, 1.0, 1.0)};
+  const std::vector<ev::EvaluationRecord> after = {
+      pairedCase("a", 0, 3.0, 11.0, 0.8, 0.6), pairedCase("b", 0, 4.0, 10.0, 0.95, 0.7),
+      pairedCase("c", 1, 3.0, 26.0, 0.6, -1.0, true), pairedCase("y", 1, 9.0, 9.0, 0.0, 0.0)};
+  const auto comparisons = ev::comparePaired(before, after);
+  ASSERT_EQ(comparisons.size(), 3u);  // level 0, level 1, all
+
+  const ev::PairedComparison& simple = comparisons[0];
+  EXPECT_EQ(simple.level, 0);
+  EXPECT_EQ(simple.only_before, 1u);
+  EXPECT_EQ(simple.only_after, 0u);
+  EXPECT_EQ(simple.chamfer.count, 2u);
+  EXPECT_DOUBLE_EQ(simple.chamfer.before, 3.0);
+  EXPECT_DOUBLE_EQ(simple.chamfer.after, 3.5);
+  EXPECT_DOUBLE_EQ(simple.chamfer.difference, 0.5);
+  // Differences +1 and 0: sample standard deviation sqrt(0.5), standard error sqrt(0.5) / sqrt(2) = 0.5.
+  EXPECT_DOUBLE_EQ(simple.chamfer.standard_error, 0.5);
+  EXPECT_EQ(simple.chamfer.changed, 1u);
+  EXPECT_DOUBLE_EQ(simple.hausdorff.difference, -0.5);  // +1 and -2
+  EXPECT_DOUBLE_EQ(simple.hausdorff.standard_error, 1.5);
+  EXPECT_NEAR(simple.normal_consistency.difference, 0.025, 1e-12);
+  EXPECT_NEAR(simple.nc_prim.difference, 0.05, 1e-12);
+
+  const ev::PairedComparison& moderate = comparisons[1];
+  EXPECT_EQ(moderate.level, 1);
+  EXPECT_EQ(moderate.only_after, 1u);
+  EXPECT_EQ(moderate.failed_before, 0u);
+  EXPECT_EQ(moderate.failed_after, 1u);
+  EXPECT_DOUBLE_EQ(moderate.chamfer.difference, -2.0);  // the failed case takes part with its score
+  EXPECT_DOUBLE_EQ(moderate.chamfer.standard_error, 0.0);  // one case
+  EXPECT_EQ(moderate.nc_prim.count, 0u);                  // not applicable after
+
+  const ev::PairedComparison& all = comparisons[2];
+  EXPECT_EQ(all.level, -1);
+  EXPECT_EQ(all.chamfer.count, 3u);
+  EXPECT_EQ(all.only_before, 1u);
+  EXPECT_EQ(all.only_after, 1u);
+  EXPECT_DOUBLE_EQ(all.chamfer.difference, -1.0 / 3.0);  // (+1 + 0 - 2) / 3
+  // Deviations 4/3, 1/3, -5/3: squares sum 42/9; variance 42/18; standard error sqrt(42/18/3).
+  EXPECT_NEAR(all.chamfer.standard_error, std::sqrt(42.0 / 18.0 / 3.0), 1e-12);
+  EXPECT_EQ(all.nc_prim.count, 2u);
+
+  const std::string md = ev::markdownComparison(comparisons, "before", "after");
+  EXPECT_NE(md.find("# before -> after"), std::string::npos) << md;
+  EXPECT_NE(md.find("| paco | polyfit | 0 | 2 (1 only before, 0 only after) | 0 -> 0 | 3.000 -> 3.500 (+0.500 ± 0.500) |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| paco | polyfit | 1 | 1 (0 only before, 1 only after) | 0 -> 1 |"), std::string::npos) << md;
+}
+
+TEST(PairedComparison, RunsWithoutACommonCaseGiveNothing) {
+  const std::vector<ev::EvaluationRecord> before = {pairedCase("a", 0, 2.0, 10.0, 0.8, 0.5)};
+  std::vector<ev::EvaluationRecord> after = {pairedCase("a", 0, 2.0, 10.0, 0.8, 0.5)};
+  after[0].assembler = "cell-complex";
+  EXPECT_TRUE(ev::comparePaired(before, after).empty());
+  EXPECT_TRUE(ev::comparePaired({}, before).empty());
+  // One level only: no "all" row.
+  EXPECT_EQ(ev::comparePaired(before, before).size(), 1u);
+}

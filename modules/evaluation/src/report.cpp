@@ -447,4 +447,143 @@ std::string markdownReport(const std::vector<EvaluationRecord>& records, const s
   return md.str();
 }
 
+namespace {
+
+// Accumulates (before, after) pairs of one metric.
+struct PairAccumulator {
+  std::vector<double> before, after;
+  void add(double b, double a) {
+    before.push_back(b);
+    after.push_back(a);
+  }
+  PairedDifference result() const {
+    PairedDifference d;
+    d.count = before.size();
+    if (d.count == 0) return d;
+    const double n = static_cast<double>(d.count);
+    double sum_diff = 0.0;
+    for (std::size_t i = 0; i < d.count; ++i) {
+      d.before += before[i] / n;
+      d.after += after[i] / n;
+      sum_diff += after[i] - before[i];
+      if (after[i] != before[i]) ++d.changed;
+    }
+    d.difference = sum_diff / n;
+    if (d.count > 1) {
+      double squares = 0.0;
+      for (std::size_t i = 0; i < d.count; ++i) {
+        const double e = after[i] - before[i] - d.difference;
+        squares += e * e;
+      }
+      d.standard_error = std::sqrt(squares / (n - 1.0) / n);
+    }
+    return d;
+  }
+};
+
+struct ComparisonAccumulator {
+  std::size_t only_before = 0, only_after = 0, failed_before = 0, failed_after = 0;
+  PairAccumulator chamfer, hausdorff, normal_consistency, nc_prim;
+  void add(const EvaluationRecord& b, const EvaluationRecord& a) {
+    failed_before += b.failed() ? 1 : 0;
+    failed_after += a.failed() ? 1 : 0;
+    chamfer.add(b.chamfer, a.chamfer);
+    hausdorff.add(b.hausdorff, a.hausdorff);
+    normal_consistency.add(b.normal_consistency, a.normal_consistency);
+    if (b.nc_prim >= 0.0 && a.nc_prim >= 0.0) nc_prim.add(b.nc_prim, a.nc_prim);
+  }
+  PairedComparison result(const std::string& method, const std::string& assembler, int level) const {
+    PairedComparison c;
+    c.method = method;
+    c.assembler = assembler;
+    c.level = level;
+    c.only_before = only_before;
+    c.only_after = only_after;
+    c.failed_before = failed_before;
+    c.failed_after = failed_after;
+    c.chamfer = chamfer.result();
+    c.hausdorff = hausdorff.result();
+    c.normal_consistency = normal_consistency.result();
+    c.nc_prim = nc_prim.result();
+    return c;
+  }
+};
+
+std::string formatPaired(const PairedDifference& d, int decimals) {
+  if (d.count == 0) return "";
+  char buffer[160];
+  std::snprintf(buffer, sizeof(buffer), "%.*f -> %.*f (%+.*f ± %.*f)", decimals, d.before, decimals, d.after,
+                decimals, d.difference, decimals, d.standard_error);
+  return buffer;
+}
+
+}  // namespace
+
+std::vector<PairedComparison> comparePaired(const std::vector<EvaluationRecord>& before,
+                                            const std::vector<EvaluationRecord>& after) {
+  // Method + assembler in order of first appearance in `before`.
+  std::vector<std::pair<std::string, std::string>> groups;
+  std::map<std::string, const EvaluationRecord*> after_by_key;
+  for (const auto& r : after) after_by_key.emplace(r.key(), &r);  // a key twice: the first counts, as below
+  std::set<std::string> before_keys;
+  std::map<std::pair<std::string, std::string>, std::map<int, ComparisonAccumulator>> accumulators;
+  for (const auto& b : before) {
+    if (!before_keys.insert(b.key()).second) continue;
+    const std::pair<std::string, std::string> group{b.method, b.assembler};
+    if (!accumulators.count(group)) groups.push_back(group);
+    auto& by_level = accumulators[group];
+    const auto it = after_by_key.find(b.key());
+    if (it == after_by_key.end()) {
+      ++by_level[b.level].only_before;
+      ++by_level[-1].only_before;
+      continue;
+    }
+    by_level[b.level].add(b, *it->second);
+    by_level[-1].add(b, *it->second);
+  }
+  std::set<std::string> after_keys;
+  for (const auto& a : after) {
+    if (!after_keys.insert(a.key()).second || before_keys.count(a.key())) continue;
+    const std::pair<std::string, std::string> group{a.method, a.assembler};
+    if (!accumulators.count(group)) continue;  // a method or assembler only the second run has
+    ++accumulators[group][a.level].only_after;
+    ++accumulators[group][-1].only_after;
+  }
+  std::vector<PairedComparison> comparisons;
+  for (const auto& group : groups) {
+    const auto& by_level = accumulators[group];
+    std::size_t compared = 0;
+    for (const auto& [level, acc] : by_level)
+      if (level >= 0) compared += acc.chamfer.before.size();
+    if (compared == 0) continue;  // nothing in common
+    for (const auto& [level, acc] : by_level)
+      if (level >= 0 && !acc.chamfer.before.empty()) comparisons.push_back(acc.result(group.first, group.second, level));
+    std::size_t levels = 0;
+    for (const auto& [level, acc] : by_level) levels += level >= 0 && !acc.chamfer.before.empty() ? 1 : 0;
+    if (levels > 1) comparisons.push_back(by_level.at(-1).result(group.first, group.second, -1));
+  }
+  return comparisons;
+}
+
+std::string markdownComparison(const std::vector<PairedComparison>& comparisons, const std::string& before_name,
+                               const std::string& after_name) {
+  std::ostringstream md;
+  md << "# " << before_name << " -> " << after_name << "\n\n"
+     << "Case by case over the cases both runs have: each metric's mean before -> after, then the mean of "
+        "the differences (after - before) ± its standard error. A failed case takes part with its failure-box "
+        "scores, as in the report's means. Lower CD and HD, higher NC and NC_prim are better.\n\n"
+     << "| method | assembler | level | cases | failed | CD | HD | NC | NC_prim | CD changed |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : comparisons) {
+    md << "| " << c.method << " | " << c.assembler << " | " << (c.level < 0 ? std::string("all") : std::to_string(c.level))
+       << " | " << c.chamfer.count;
+    if (c.only_before || c.only_after) md << " (" << c.only_before << " only before, " << c.only_after << " only after)";
+    md << " | " << c.failed_before << " -> " << c.failed_after << " | " << formatPaired(c.chamfer, 3) << " | "
+       << formatPaired(c.hausdorff, 2) << " | " << formatPaired(c.normal_consistency, 4) << " | "
+       << formatPaired(c.nc_prim, 4) << " | " << c.chamfer.changed << " |\n";
+  }
+  if (comparisons.empty()) md << "\nThe two runs have no case in common.\n";
+  return md.str();
+}
+
 }  // namespace paco::evaluation

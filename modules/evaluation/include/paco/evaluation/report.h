@@ -3,6 +3,8 @@
 //   paco::evaluation::EvaluationRecord r; r.method = "direct"; ...;     // one CSV row per case
 //   paco::evaluation::appendRecord(csv_stream, r);                      // header: csvHeader()
 //   std::string md = paco::evaluation::markdownReport(paco::evaluation::readRecords("eval.csv"));
+//   std::string diff = paco::evaluation::markdownComparison(
+//       paco::evaluation::comparePaired(readRecords("a/eval.csv"), readRecords("b/eval.csv")), "a", "b");
 #include <paco/common/surface_mesh.h>
 #include <paco/evaluation/metrics.h>
 
@@ -119,5 +121,36 @@ Summary summarize(const std::vector<EvaluationRecord>& records);
 /// verbatim.
 std::string markdownReport(const std::vector<EvaluationRecord>& records, const std::string& title = "Evaluation",
                            const std::string& notes = "");
+
+/// One metric compared case by case between two runs of the same cases.
+struct PairedDifference {
+  std::size_t count = 0;        ///< cases in both runs where the metric applies
+  double before = 0.0, after = 0.0;  ///< means over those cases
+  double difference = 0.0;      ///< mean of (after - before)
+  double standard_error = 0.0;  ///< of that mean: sample standard deviation / sqrt(count); 0 for one case
+  std::size_t changed = 0;      ///< cases whose value differs
+};
+
+/// Two runs of one method and assembler compared on the cases both have (matched by
+/// EvaluationRecord::key()), for one level or all of them. A failed case takes part with its
+/// failure-box scores, as it does in the report's means; NC_prim only where both runs have it.
+struct PairedComparison {
+  std::string method, assembler;
+  int level = -1;                        ///< -1: all levels
+  std::size_t only_before = 0, only_after = 0;  ///< cases that one run lacks (left out)
+  std::size_t failed_before = 0, failed_after = 0;  ///< among the compared cases
+  PairedDifference chamfer, hausdorff, normal_consistency, nc_prim;
+};
+
+/// One comparison per method + assembler present in both runs and per level, then over all levels
+/// (only when there is more than one level), in that order.
+std::vector<PairedComparison> comparePaired(const std::vector<EvaluationRecord>& before,
+                                            const std::vector<EvaluationRecord>& after);
+
+/// The comparisons as a Markdown table: per row the method, assembler, level, cases, failures
+/// before -> after, and for CD, HD, NC and NC_prim the means before -> after with the paired
+/// difference ± its standard error. `before_name` and `after_name` head the document.
+std::string markdownComparison(const std::vector<PairedComparison>& comparisons, const std::string& before_name,
+                               const std::string& after_name);
 
 }  // namespace paco::evaluation
