@@ -482,25 +482,22 @@ struct PairAccumulator {
 };
 
 struct ComparisonAccumulator {
-  std::size_t only_before = 0, only_after = 0, failed_before = 0, failed_after = 0;
+  PairedComparison counts;  // the case counts as they come; the differences are filled in by result()
   PairAccumulator chamfer, hausdorff, normal_consistency, nc_prim;
   void add(const EvaluationRecord& b, const EvaluationRecord& a) {
-    failed_before += b.failed() ? 1 : 0;
-    failed_after += a.failed() ? 1 : 0;
+    counts.failed_before += b.failed() ? 1 : 0;
+    counts.failed_after += a.failed() ? 1 : 0;
     chamfer.add(b.chamfer, a.chamfer);
     hausdorff.add(b.hausdorff, a.hausdorff);
     normal_consistency.add(b.normal_consistency, a.normal_consistency);
     if (b.nc_prim >= 0.0 && a.nc_prim >= 0.0) nc_prim.add(b.nc_prim, a.nc_prim);
   }
+  bool empty() const { return chamfer.before.empty(); }
   PairedComparison result(const std::string& method, const std::string& assembler, int level) const {
-    PairedComparison c;
+    PairedComparison c = counts;
     c.method = method;
     c.assembler = assembler;
     c.level = level;
-    c.only_before = only_before;
-    c.only_after = only_after;
-    c.failed_before = failed_before;
-    c.failed_after = failed_after;
     c.chamfer = chamfer.result();
     c.hausdorff = hausdorff.result();
     c.normal_consistency = normal_consistency.result();
@@ -524,7 +521,7 @@ std::vector<PairedComparison> comparePaired(const std::vector<EvaluationRecord>&
   // Method + assembler in order of first appearance in `before`.
   std::vector<std::pair<std::string, std::string>> groups;
   std::map<std::string, const EvaluationRecord*> after_by_key;
-  for (const auto& r : after) after_by_key.emplace(r.key(), &r);  // a key twice: the first counts, as below
+  for (const auto& r : after) after_by_key.emplace(r.key(), &r);  // a key twice: the first counts, as in `before`
   std::set<std::string> before_keys;
   std::map<std::pair<std::string, std::string>, std::map<int, ComparisonAccumulator>> accumulators;
   for (const auto& b : before) {
@@ -534,32 +531,29 @@ std::vector<PairedComparison> comparePaired(const std::vector<EvaluationRecord>&
     auto& by_level = accumulators[group];
     const auto it = after_by_key.find(b.key());
     if (it == after_by_key.end()) {
-      ++by_level[b.level].only_before;
-      ++by_level[-1].only_before;
+      ++by_level[b.level].counts.only_before;
+      ++by_level[-1].counts.only_before;
       continue;
     }
     by_level[b.level].add(b, *it->second);
     by_level[-1].add(b, *it->second);
   }
-  std::set<std::string> after_keys;
-  for (const auto& a : after) {
-    if (!after_keys.insert(a.key()).second || before_keys.count(a.key())) continue;
-    const std::pair<std::string, std::string> group{a.method, a.assembler};
+  for (const auto& [key, a] : after_by_key) {
+    if (before_keys.count(key)) continue;
+    const std::pair<std::string, std::string> group{a->method, a->assembler};
     if (!accumulators.count(group)) continue;  // a method or assembler only the second run has
-    ++accumulators[group][a.level].only_after;
-    ++accumulators[group][-1].only_after;
+    ++accumulators[group][a->level].counts.only_after;
+    ++accumulators[group][-1].counts.only_after;
   }
   std::vector<PairedComparison> comparisons;
   for (const auto& group : groups) {
     const auto& by_level = accumulators[group];
-    std::size_t compared = 0;
-    for (const auto& [level, acc] : by_level)
-      if (level >= 0) compared += acc.chamfer.before.size();
-    if (compared == 0) continue;  // nothing in common
-    for (const auto& [level, acc] : by_level)
-      if (level >= 0 && !acc.chamfer.before.empty()) comparisons.push_back(acc.result(group.first, group.second, level));
-    std::size_t levels = 0;
-    for (const auto& [level, acc] : by_level) levels += level >= 0 && !acc.chamfer.before.empty() ? 1 : 0;
+    std::size_t levels = 0;  // with a case in common
+    for (const auto& [level, acc] : by_level) {
+      if (level < 0 || acc.empty()) continue;
+      comparisons.push_back(acc.result(group.first, group.second, level));
+      ++levels;
+    }
     if (levels > 1) comparisons.push_back(by_level.at(-1).result(group.first, group.second, -1));
   }
   return comparisons;
