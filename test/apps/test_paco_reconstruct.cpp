@@ -223,6 +223,44 @@ void writeHalfBoxScan(const std::string& path, const Eigen::Matrix3d& turn) {
 }
 }  // namespace
 
+// A plate 1 x 1 x 0.04 scanned on its two sides only: the network adds nothing (--threshold 1), so
+// the rims come from the box fill. They are narrower than twice the fill's empty radius (0.05 of
+// the diagonal), and before the fill capped that radius on narrow faces the sides' points covered
+// them: no rim, no solid ("all planes are parallel to one direction").
+TEST(PacoReconstruct, AThinPlateScannedOnItsTwoSidesClosesAtItsThickness) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  const paco::SurfaceSample surface = paco::sampleSurface(paco::test::makeBox({0, 0, 0}, {1, 1, 0.04}), 6000, 5);
+  paco::io::LabelledCloud scan;
+  scan.has_normals = true;
+  for (std::size_t i = 0; i < surface.points.size(); ++i) {
+    if (std::abs(surface.normals[i].z()) < 0.5) continue;
+    pcl::PointNormal p;
+    p.getVector3fMap() = surface.points[i].cast<float>();
+    p.getNormalVector3fMap() = surface.normals[i].cast<float>();
+    scan.points.push_back(p);
+  }
+  paco::io::saveCloud(dir.file("plate.pcd"), scan);
+  for (const std::string assembler : {"polyfit", "cell-complex"}) {
+    const std::string mesh_path = dir.file("plate_" + assembler + ".obj");
+    std::string log;
+    ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("plate.pcd")) + " --model " +
+                                         quoted(dir.file("tiny.pt")) + " --threshold 1 --assembler " + assembler +
+                                         " -o " + quoted(mesh_path),
+                                     &log),
+              0)
+        << log;
+    EXPECT_NE(log.find("(4 new box faces)"), std::string::npos) << log;
+    const paco::SurfaceMesh mesh = paco::io::loadMesh(mesh_path);
+    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold()) << assembler;
+    Eigen::Vector3d lo, hi;
+    paco::boundingBox(mesh, lo, hi);
+    EXPECT_NEAR(hi.z() - lo.z(), 0.04, 0.002) << assembler;
+    EXPECT_NEAR(paco::signedVolume(mesh), 0.04, 0.004) << assembler << "\n" << log;
+  }
+}
+
 // A scan of the box [0,2] x [0,1] x [0,1] that stopped at x = 1 ends there; told that the object
 // reaches x = 2, the box fill closes the hidden side there, and the mesh reaches it.
 TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {

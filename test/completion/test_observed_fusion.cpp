@@ -319,6 +319,31 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   }
 }
 
+TEST(ObservedFusion, TheRimOfAThinPlateIsFilled) {
+  // A plate 1 x 1 x 0.04 seen on both sides (20 x 20 grids; diagonal 1.415): its four rims are
+  // 0.04 wide, narrower than twice the fill's default empty radius (0.05 of the diagonal, 0.071),
+  // so the top's and bottom's points alone would cover them, and with no rim the assemblers
+  // cannot close the plate. Each rim must become a box face with points in its middle.
+  const std::vector<PlanarPrimitive> observed = {
+      patch(Plane::fromPointAndNormal({0, 0, 0.04}, {0, 0, 1}), {0.5, 0.5, 0.04}, 1.0, 20, 1.0f),
+      patch(Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1}), {0.5, 0.5, 0}, 1.0, 20, 1.0f)};
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved({}, observed, ObservedFusionOptions{}, &report);
+  ASSERT_EQ(fused.size(), 6u) << describe(report);
+  EXPECT_EQ(report.filled_faces, 4u);
+  const Eigen::Vector3d rim_normals[] = {{1, 0, 0}, {0, 1, 0}};
+  for (std::size_t f = 2; f < 6; ++f) {
+    const PlanarPrimitive& rim = fused[f];
+    EXPECT_TRUE(rim.plane.normal.cwiseAbs().isApprox(rim_normals[0], 1e-9) ||
+                rim.plane.normal.cwiseAbs().isApprox(rim_normals[1], 1e-9))
+        << rim.plane.normal.transpose();
+    EXPECT_GE(rim.points.size(), 10u);  // the assemblers drop a primitive with fewer
+    bool middle = false;
+    for (const auto& p : rim.points) middle = middle || std::abs(p.z - 0.02f) < 1e-6f;
+    EXPECT_TRUE(middle) << "no point half-way up rim " << f;
+  }
+}
+
 TEST(ObservedFusion, AKnownExtentMovesTheFilledFacesOutToIt) {
   // The scene of the test above. The object is known to reach x = 1.5 and y = 1.2: the filled
   // faces x = 0.95 and y = 0.95 move out to x = 1.5 and y = 1.2; y = 0.05 stays. The predicted

@@ -391,6 +391,8 @@ class ScannerView {
   completion::detail::PlaneBins<double> seen_{0.0};  // distance from the scanner, by line of sight
 };
 
+constexpr int kMinFillSteps = 4;
+
 // Adds grid points on the faces of the seen box where no fused point is near and the scan does
 // not show the space empty (SeenFreeSpace; see ObservedFusionOptions::fill_spacing).
 void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observed,
@@ -409,10 +411,17 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
     std::vector<Eigen::Vector3d> points;
   };
   std::vector<Face> faces;
+  std::vector<double> face_radius;  // radius, capped for a narrow face (below)
   for (int axis = 0; axis < 3; ++axis) {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const int nu = std::max(1, static_cast<int>(std::ceil((hi[u] - lo[u]) / step)));
-    const int nv = std::max(1, static_cast<int>(std::ceil((hi[v] - lo[v]) / step)));
+    // The points of the faces a box face meets at its edges lie within half its width of its
+    // middle: on a face narrower than twice the radius (the rim of a plate or a floor slab, a few
+    // percent of the diagonal thick) they would cover it all, and the fill would leave the rim
+    // open. A quarter of its width keeps its middle half.
+    const double narrow_radius = std::min(radius, 0.25 * std::min(hi[u] - lo[u], hi[v] - lo[v]));
+    // At least four steps across, so that a narrow face keeps rows in its middle half.
+    const int nu = std::max(kMinFillSteps, static_cast<int>(std::ceil((hi[u] - lo[u]) / step)));
+    const int nv = std::max(kMinFillSteps, static_cast<int>(std::ceil((hi[v] - lo[v]) / step)));
     for (int side = 0; side < 2; ++side) {
       Eigen::Vector3d local = Eigen::Vector3d::Zero();
       local[axis] = side ? hi[axis] : lo[axis];
@@ -425,6 +434,7 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
           face.points.push_back(seen.axes * local);
         }
       faces.push_back(std::move(face));
+      face_radius.push_back(narrow_radius);
     }
   }
   std::vector<const pcl::PointCloud<pcl::PointNormal>*> clouds;
@@ -434,10 +444,11 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
   const std::vector<double> distances = nearestDistances(all, clouds);
   std::size_t next = 0;
   std::optional<SeenFreeSpace> free_space;  // built once some box point is uncovered
-  for (const auto& face : faces) {
+  for (std::size_t k = 0; k < faces.size(); ++k) {
+    const Face& face = faces[k];
     std::vector<Eigen::Vector3d> empty;
     for (const auto& q : face.points) {
-      if (distances[next++] <= radius) continue;
+      if (distances[next++] <= face_radius[k]) continue;
       if (!free_space) free_space.emplace(observed, options.min_observed_points, seen.axes, radius);
       if (free_space->showsEmpty(q)) {
         ++counts.fill_in_seen_free_space;
