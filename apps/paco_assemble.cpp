@@ -30,7 +30,7 @@ void printHelp(const po::options_description& options) {
             << "Assembles planar primitives into a closed, manifold, outward-oriented polygonal mesh.\n\n"
             << "PRIMITIVES  a PolyFit vertex-group file (.vg ascii, .bvg binary), or a labelled point cloud\n"
             << "            (.pcd/.ply/.xyz/.npy with a label / plane_id per point; label -1 = none).\n"
-            << "MESH        output mesh, by extension: .obj, .off or .ply. Written only on success.\n\n"
+            << "MESH        output mesh, by extension: .obj, .off, .ply or .stl. Written only on success.\n\n"
             << options << "\n"
             << "Backends:\n"
             << "  polyfit       CGAL's PolyFit: intersect the planes into candidate faces and select a\n"
@@ -96,7 +96,7 @@ int run(int argc, char** argv) {
   po::options_description options("Options");
   options.add_options()
       ("help,h", "print this help and exit")
-      ("output,o", po::value(&output), "output mesh (.obj, .off, .ply)")
+      ("output,o", po::value(&output), "output mesh (.obj, .off, .ply, .stl)")
       ("backend,b", po::value(&backend)->default_value(backend), "polyfit | cell-complex")
       ("solver", po::value(&solver)->default_value(solver), "MIP solver of polyfit: cbc | glpk")
       ("time-limit", po::value(&time_limit)->default_value(time_limit, shortNumber(time_limit)),
@@ -131,7 +131,7 @@ int run(int argc, char** argv) {
   }
   if (input.empty()) throw paco::app::UsageError("missing input file (PRIMITIVES)");
   if (output.empty()) throw paco::app::UsageError("missing output mesh (-o MESH)");
-  paco::app::checkOutputPath(output, "-o", {".obj", ".off", ".ply"});
+  paco::app::checkOutputPath(output, "-o", {".obj", ".off", ".ply", ".stl"});
   paco::app::checkOutputsAreNotInputs({{"PRIMITIVES", input}}, {{"-o", output}});
   validateAssemblyOptions(time_limit, fitting, coverage, complexity, smoothness, min_support, merge_angle,
                           merge_distance);

@@ -52,7 +52,7 @@ void printHelp(const po::options_description& visible) {
   std::cout
       << "Usage: " << kTool << " INPUT -o MESH [options]\n\n"
       << "Turns an incomplete point cloud of a piecewise-planar object (.pcd .ply .xyz .npy, with or\n"
-      << "without normals, any units and frame) into a watertight polygonal mesh (.obj .off .ply):\n"
+      << "without normals, any units and frame) into a watertight polygonal mesh (.obj .off .ply .stl):\n"
       << "  1. segment the points into planes          (--segmenter)\n"
       << "  2-3. complete the set of planar primitives  (--model; --no-completion skips this)\n"
       << "  4. assemble the primitives into a mesh      (--assembler, --solver, --time-limit)\n"
@@ -71,7 +71,7 @@ int run(int argc, char** argv) {
   po::options_description visible("Options");
   visible.add_options()
       ("help,h", "print this help")
-      ("output,o", po::value(&o.output), "output mesh (.obj, .off or .ply)")
+      ("output,o", po::value(&o.output), "output mesh (.obj, .off, .ply or .stl)")
       ("vg", po::value(&o.vg_output), "primitives as PolyFit vertex groups (default: MESH stem + .vg)")
       ("pcd", po::value(&o.pcd_output), "primitives as a PCD coloured by primitive (default: MESH stem + _primitives.pcd)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "gocopp, region-growing, ransac or efficient-ransac")

@@ -29,7 +29,8 @@ TEST(PacoAssemble, AssemblesVertexGroupsWithBothBackends) {
     SCOPED_TRACE(options);
     const bool polyfit = options.find("polyfit") != std::string::npos;
     const bool warm_start = polyfit && options.find("--no-warm-start") == std::string::npos;
-    const std::string mesh_path = dir.file(std::string("bracket_") + (polyfit ? "polyfit" : "cell_complex") + ".obj");
+    // The cell complex's mesh goes to STL, which the tool writes as well.
+    const std::string mesh_path = dir.file(std::string("bracket_") + (polyfit ? "polyfit.obj" : "cell_complex.stl"));
     std::string out;
     const int rc = paco::test::runCommand(tool() + " " + quoted(dir.file("bracket.bvg")) + " -o " + quoted(mesh_path) +
                                               " " + options, &out);
@@ -92,7 +93,8 @@ TEST(PacoAssemble, UsageErrorsAndHelp) {
   EXPECT_EQ(paco::test::runCommand(tool() + " in.vg", &out), 2);
   EXPECT_EQ(paco::test::runCommand(tool() + " in.vg -o out.obj --backend ksr", &out), 2);
   EXPECT_NE(out.find("unknown assembly backend"), std::string::npos) << out;
-  EXPECT_EQ(paco::test::runCommand(tool() + " in.vg -o out.stl", &out), 2);
+  EXPECT_EQ(paco::test::runCommand(tool() + " in.vg -o out.3mf", &out), 2);
+  EXPECT_NE(out.find("-o must name a .obj, .off, .ply or .stl file"), std::string::npos) << out;
 }
 
 }  // namespace
