@@ -183,6 +183,26 @@ TEST(StrayPoints, PointsNearerThanTheScanIsWideOrManyOfThemAreKept) {
   EXPECT_EQ(findStrayPoints(boxWith({{nan, 0, 0}, {40, 0, 0}})), (std::vector<int>{2001}));
 }
 
+TEST(StrayPoints, ASparseCloudOrMoreFarPointsThanStraysHaveIsKept) {
+  // Ten points spread through a box, each farther from the others than a link: no group holds
+  // most of them, so none is stray (all but one were, and the segmenter then said "the input has 1").
+  pcl::PointCloud<pcl::PointXYZ> sparse;
+  for (int i = 0; i < 10; ++i)
+    sparse.push_back(pcl::PointXYZ(float(i % 2), float((i / 2) % 2) + 0.1f * float(i), float(i / 4)));
+  EXPECT_TRUE(findStrayPoints(sparse).empty());
+  // A 2,000-point box and 11 single points far from it and from each other: one more than 0.5 %
+  // of the points, so none is stray; with 10 of them, all are.
+  // (On a sphere of radius 40 about the box, at least 20 apart: each is a group of its own.)
+  std::vector<Eigen::Vector3f> far;
+  for (int i = 0; i < 11; ++i) {
+    const float z = 1.0f - 2.0f * (float(i) + 0.5f) / 11.0f, r = std::sqrt(1.0f - z * z), a = 2.4f * float(i);
+    far.push_back(Eigen::Vector3f(0.5f, 0.5f, 0.5f) + 40.0f * Eigen::Vector3f(r * std::cos(a), r * std::sin(a), z));
+  }
+  EXPECT_TRUE(findStrayPoints(boxWith(far)).empty());
+  far.pop_back();
+  EXPECT_EQ(findStrayPoints(boxWith(far)).size(), 10u);
+}
+
 TEST(Thinning, BadInputIsAClearError) {
   const LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 1000, 3);
   pcl::PointCloud<pcl::PointNormal> out;

@@ -182,6 +182,9 @@ std::vector<int> strayPointsAmong(const pcl::PointCloud<PointT>& cloud, const st
       std::max_element(members.begin(), members.end(),
                        [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() < b.size(); }) -
       members.begin());
+  // Without a group that holds most of the points the cloud is sparse (points farther apart than
+  // a link), not a scan with a few strays: ten points in a box would otherwise all be stray but one.
+  if (2 * members[main].size() <= finite->size()) return {};
   Eigen::AlignedBox3f main_box;
   for (int i : members[main]) main_box.extend((*finite)[static_cast<std::size_t>(i)].getVector3fMap());
   const double reach = main_box.diagonal().norm();
@@ -216,10 +219,12 @@ std::vector<int> findStrayPoints(const pcl::PointCloud<PointT>& cloud) {
     if (pcl::isFinite(cloud[i])) kept.push_back(static_cast<int>(i));
   // A far stray stretches the box, and with it the link, so that a nearer stray group joins the
   // part; without the far one, the next round separates it. Rarely more than two rounds.
+  // In all at most 0.5 % of the points (at least 1), as for one group.
+  const std::size_t budget = std::max<std::size_t>(1, kept.size() / 200);
   std::vector<int> strays;
   for (int round = 0; round < 4; ++round) {
     std::vector<int> found = strayPointsAmong(cloud, kept);
-    if (found.empty()) break;
+    if (found.empty() || strays.size() + found.size() > budget) break;
     std::sort(found.begin(), found.end());
     std::vector<int> rest;
     std::set_difference(kept.begin(), kept.end(), found.begin(), found.end(), std::back_inserter(rest));

@@ -64,7 +64,9 @@ std::size_t removeRepeatedPoints(const pcl::PointCloud<PointT>& input, pcl::Poin
 /// points less than 5 % of the bounding-box diagonal apart joins them (pcl::EuclideanClusterExtraction
 /// on a voxel grid, which may merge groups up to 2.7 times that apart but never splits one); a
 /// group is stray when it holds at most 0.5 % of the points (at least 1) and every other point
-/// lies farther from it than the bounding-box diagonal of the largest group.
+/// lies farther from it than the bounding-box diagonal of the largest group. In all at most 0.5 %
+/// of the points (at least 1) are stray: beyond that, and when no group holds most of the points,
+/// the far points are a sparse scan's, not strays, and none is.
 ///
 /// Why: the pipeline closes a mesh around everything it is given, so one stray point 40 times
 /// the part's size away turns the part into a 40-unit tetrahedron; it also stretches the box
