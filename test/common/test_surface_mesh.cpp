@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 namespace {
 // Axis-aligned box [0,a]x[0,b]x[0,c] with outward quads.
 paco::SurfaceMesh box(double a, double b, double c) {
@@ -100,6 +102,57 @@ TEST(SurfaceMesh, SamplingIsUniformByAreaAndDeterministic) {
   }
   EXPECT_NEAR(static_cast<double>(top) / 20000.0, 1.0 / 18.0, 0.01);  // area 1 of 18
   EXPECT_NE(paco::sampleSurface(m, 10, 8).points, paco::sampleSurface(m, 10, 7).points);
+}
+
+// An L-shaped face in z = 0 (area 3: a 2 x 2 square less its 1 x 1 corner at x, y > 1), its
+// loop starting at the reflex corner (1, 1), with a straight corner at (0, 1) on the left edge. A
+// fan from (1, 1) covers the missing corner too (area 4): the assemblers merge a plane's
+// faces into such polygons, and the metrics sampled them by fans.
+namespace {
+paco::SurfaceMesh lFace() {
+  paco::SurfaceMesh m;
+  m.vertices = {{1, 1, 0}, {1, 2, 0}, {0, 2, 0}, {0, 1, 0}, {0, 0, 0}, {2, 0, 0}, {2, 1, 0}};
+  m.faces = {{0, 1, 2, 3, 4, 5, 6}};
+  return m;
+}
+
+bool insideL(const Eigen::Vector3d& p) {
+  const double eps = 1e-9;
+  return p.x() > -eps && p.y() > -eps && p.x() < 2 + eps && p.y() < 2 + eps && (p.x() < 1 + eps || p.y() < 1 + eps);
+}
+}  // namespace
+
+TEST(SurfaceMesh, ANonConvexFaceIsTriangulatedAndSampledWithinItself) {
+  const paco::SurfaceMesh m = lFace();
+  std::vector<std::vector<std::uint32_t>> triangles;
+  paco::triangulateFace(m, 0, triangles);
+  EXPECT_EQ(triangles.size(), 4u);  // 7 corners, one straight: 6 - 2
+  double area = 0;
+  for (const auto& t : triangles) {
+    const Eigen::Vector3d a = m.vertices[t[0]], b = m.vertices[t[1]], c = m.vertices[t[2]];
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    EXPECT_GT(n.z(), 0.0);  // the face's orientation
+    area += 0.5 * n.norm();
+    EXPECT_TRUE(insideL((a + b + c) / 3.0)) << ((a + b + c) / 3.0).transpose();
+  }
+  EXPECT_NEAR(area, 3.0, 1e-12);
+  EXPECT_NEAR(paco::surfaceArea(m), 3.0, 1e-12);
+  const paco::SurfaceMesh tri = paco::triangulated(m);
+  EXPECT_EQ(tri.faces.size(), 4u);
+  for (const auto& p : paco::sampleSurface(m, 5000, 3).points) ASSERT_TRUE(insideL(p)) << p.transpose();
+  // Flipped, the same cover with the other orientation.
+  paco::SurfaceMesh flipped = m;
+  paco::flipFaces(flipped);
+  triangles.clear();
+  paco::triangulateFace(flipped, 0, triangles);
+  ASSERT_EQ(triangles.size(), 4u);
+  for (const auto& t : triangles)
+    EXPECT_LT((flipped.vertices[t[1]] - flipped.vertices[t[0]]).cross(flipped.vertices[t[2]] - flipped.vertices[t[0]]).z(), 0.0);
+  // In any plane: the face turned about a tilted axis keeps its area.
+  paco::SurfaceMesh turned = m;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  for (auto& v : turned.vertices) v = r * v;
+  EXPECT_NEAR(paco::surfaceArea(turned), 3.0, 1e-9);
 }
 
 TEST(SurfaceMesh, ValidateRejectsBadIndicesAndNaN) {

@@ -1,6 +1,7 @@
 #include <paco/common/error.h>
 #include <paco/common/surface_mesh.h>
 
+#include <Eigen/Geometry>
 #include <pcl/conversions.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -167,10 +168,13 @@ Eigen::Vector3d faceNormal(const SurfaceMesh& mesh, std::size_t face) {
 
 double surfaceArea(const SurfaceMesh& mesh) {
   double area = 0;
-  for (const auto& f : mesh.faces)
-    for (std::size_t k = 1; k + 1 < f.size(); ++k)
-      area += 0.5 * (mesh.vertices[f[k]] - mesh.vertices[f[0]])
-                        .cross(mesh.vertices[f[k + 1]] - mesh.vertices[f[0]]).norm();
+  std::vector<std::vector<std::uint32_t>> triangles;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    triangles.clear();
+    triangulateFace(mesh, f, triangles);
+    for (const auto& t : triangles)
+      area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+  }
   return area;
 }
 
@@ -195,12 +199,76 @@ void flipFaces(SurfaceMesh& mesh) {
   for (auto& f : mesh.faces) std::reverse(f.begin(), f.end());
 }
 
+void triangulateFace(const SurfaceMesh& mesh, std::size_t face, std::vector<std::vector<std::uint32_t>>& out) {
+  const std::vector<std::uint32_t>& polygon = mesh.faces[face];
+  const bool finite = std::all_of(polygon.begin(), polygon.end(), [&](std::uint32_t i) { return mesh.vertices[i].allFinite(); });
+  if (polygon.size() == 3 || !finite) {  // a non-finite corner stays in a triangle, for validate() to find
+    for (std::size_t k = 1; k + 1 < polygon.size(); ++k) out.push_back({polygon[0], polygon[k], polygon[k + 1]});
+    return;
+  }
+  // Work in 2D: drop the largest coordinate of the (Newell) normal, keeping counter-clockwise
+  // (seen from the normal's side) positive.
+  const Eigen::Vector3d normal = faceNormal(mesh, face);
+  int axis = 2;
+  normal.cwiseAbs().maxCoeff(&axis);
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const double sign = normal[axis] >= 0 ? 1.0 : -1.0;
+  const auto at = [&](std::uint32_t i) { return Eigen::Vector2d(mesh.vertices[i][u], mesh.vertices[i][v]); };
+  const auto turn = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+    return sign * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+  };
+  // Below this a corner counts as straight: relative to the face's size, far above rounding.
+  Eigen::AlignedBox2d box;
+  for (std::uint32_t i : polygon) box.extend(at(i));
+  const double straight = 1e-12 * box.diagonal().squaredNorm();
+
+  const auto cornerAt = [&](const std::vector<std::uint32_t>& loop, std::size_t k) {
+    return turn(at(loop[(k + loop.size() - 1) % loop.size()]), at(loop[k]), at(loop[(k + 1) % loop.size()]));
+  };
+  bool convex = true;
+  for (std::size_t k = 0; k < polygon.size() && convex; ++k) convex = cornerAt(polygon, k) >= -straight;
+  if (convex) {  // a fan, as always: convex faces sample exactly as before ear clipping existed
+    for (std::size_t k = 1; k + 1 < polygon.size(); ++k) out.push_back({polygon[0], polygon[k], polygon[k + 1]});
+    return;
+  }
+  // Straight corners first: dropping one leaves the same polygon, and ears never straddle it.
+  std::vector<std::uint32_t> ring;
+  for (std::size_t k = 0; k < polygon.size(); ++k)
+    if (std::abs(cornerAt(polygon, k)) > straight) ring.push_back(polygon[k]);
+  while (ring.size() > 3) {
+    bool clipped = false;
+    for (std::size_t k = 0; k < ring.size() && !clipped; ++k) {
+      const std::size_t p = (k + ring.size() - 1) % ring.size(), q = (k + 1) % ring.size();
+      const Eigen::Vector2d a = at(ring[p]), b = at(ring[k]), c = at(ring[q]);
+      const double corner = turn(a, b, c);
+      if (std::abs(corner) <= straight) {  // straight after an ear was cut next to it
+        ring.erase(ring.begin() + static_cast<std::ptrdiff_t>(k));
+        clipped = true;
+        continue;
+      }
+      if (corner < 0) continue;  // reflex: not an ear
+      bool empty = true;  // no other corner inside or on the candidate ear
+      for (std::size_t j = 0; j < ring.size() && empty; ++j) {
+        if (j == p || j == k || j == q) continue;
+        const Eigen::Vector2d x = at(ring[j]);
+        empty = !(turn(a, b, x) >= 0 && turn(b, c, x) >= 0 && turn(c, a, x) >= 0);
+      }
+      if (!empty) continue;
+      out.push_back({ring[p], ring[k], ring[q]});
+      ring.erase(ring.begin() + static_cast<std::ptrdiff_t>(k));
+      clipped = true;
+    }
+    if (!clipped) break;
+  }
+  if (ring.size() == 3 && std::abs(turn(at(ring[0]), at(ring[1]), at(ring[2]))) <= straight) return;
+  for (std::size_t k = 1; k + 1 < ring.size(); ++k) out.push_back({ring[0], ring[k], ring[k + 1]});
+}
+
 SurfaceMesh triangulated(const SurfaceMesh& mesh) {
   SurfaceMesh out;
   out.vertices = mesh.vertices;
   out.faces.reserve(mesh.numTriangles());
-  for (const auto& f : mesh.faces)
-    for (std::size_t k = 1; k + 1 < f.size(); ++k) out.faces.push_back({f[0], f[k], f[k + 1]});
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) triangulateFace(mesh, f, out.faces);
   return out;
 }
 
@@ -210,14 +278,15 @@ SurfaceSample sampleSurface(const SurfaceMesh& mesh, std::size_t count, std::uin
   std::vector<Triangle> triangles;
   std::vector<double> cumulative;
   double total = 0;
+  std::vector<std::vector<std::uint32_t>> pieces;
   for (std::size_t fi = 0; fi < mesh.faces.size(); ++fi) {
-    const auto& f = mesh.faces[fi];
-    for (std::size_t k = 1; k + 1 < f.size(); ++k) {
-      const double a = 0.5 * (mesh.vertices[f[k]] - mesh.vertices[f[0]])
-                                 .cross(mesh.vertices[f[k + 1]] - mesh.vertices[f[0]]).norm();
+    pieces.clear();
+    triangulateFace(mesh, fi, pieces);
+    for (const auto& t : pieces) {
+      const double a = 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
       if (!(a > 0)) continue;
       total += a;
-      triangles.push_back({static_cast<std::uint32_t>(fi), f[0], f[k], f[k + 1]});
+      triangles.push_back({static_cast<std::uint32_t>(fi), t[0], t[1], t[2]});
       cumulative.push_back(total);
     }
   }

@@ -25,55 +25,6 @@ std::string number(double value) {
   return out.str();
 }
 
-/// Ear clipping of one planar polygon (indices into `vertices`), in the plane's 2D projection.
-/// paco::triangulated() fans, which is only right for convex faces; CAD faces (an L-shaped top)
-/// are often not convex.
-void triangulatePolygon(const std::vector<Eigen::Vector3d>& vertices, const std::vector<std::uint32_t>& polygon,
-                        const Eigen::Vector3d& normal, std::vector<std::vector<std::uint32_t>>& out) {
-  int axis = 0;  // drop the dominant axis of the normal
-  normal.cwiseAbs().maxCoeff(&axis);
-  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-  const double sign = normal[axis] >= 0 ? 1.0 : -1.0;  // keeps counter-clockwise = positive area
-  auto at = [&](std::uint32_t i) { return Eigen::Vector2d(vertices[i][u], vertices[i][v]); };
-  auto cross = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-    return sign * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
-  };
-  std::vector<std::uint32_t> ring = polygon;
-  std::size_t guard = 0;
-  while (ring.size() > 3 && guard < 4 * polygon.size() * polygon.size()) {
-    ++guard;
-    bool clipped = false;
-    for (std::size_t k = 0; k < ring.size() && !clipped; ++k) {
-      const std::size_t p = (k + ring.size() - 1) % ring.size(), q = (k + 1) % ring.size();
-      const Eigen::Vector2d a = at(ring[p]), b = at(ring[k]), c = at(ring[q]);
-      if (cross(a, b, c) <= 0) continue;  // reflex or flat corner: not an ear
-      bool empty = true;
-      for (std::size_t j = 0; j < ring.size() && empty; ++j) {
-        if (j == p || j == k || j == q) continue;
-        const Eigen::Vector2d x = at(ring[j]);
-        empty = !(cross(a, b, x) >= 0 && cross(b, c, x) >= 0 && cross(c, a, x) >= 0);
-      }
-      if (!empty) continue;
-      out.push_back({ring[p], ring[k], ring[q]});
-      ring.erase(ring.begin() + static_cast<std::ptrdiff_t>(k));
-      clipped = true;
-    }
-    if (!clipped) break;  // degenerate polygon: fan the rest
-  }
-  for (std::size_t k = 1; k + 1 < ring.size(); ++k) out.push_back({ring[0], ring[k], ring[k + 1]});
-}
-
-SurfaceMesh triangulatePolygons(const SurfaceMesh& mesh) {
-  SurfaceMesh out;
-  out.vertices = mesh.vertices;
-  out.faces.reserve(mesh.faces.size());
-  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
-    if (mesh.faces[f].size() == 3) out.faces.push_back(mesh.faces[f]);
-    else triangulatePolygon(mesh.vertices, mesh.faces[f], faceNormal(mesh, f), out.faces);
-  }
-  return out;
-}
-
 }  // namespace
 
 GroundTruth extractGroundTruth(const SurfaceMesh& input, const GroundTruthOptions& options) {
@@ -83,7 +34,7 @@ GroundTruth extractGroundTruth(const SurfaceMesh& input, const GroundTruthOption
   input.validate("mesh");
 
   GroundTruth gt;
-  gt.mesh = triangulatePolygons(input);
+  gt.mesh = triangulated(input);  // ear clipping: CAD faces are often not convex
   Eigen::Vector3d lo, hi;
   boundingBox(gt.mesh, lo, hi);
   gt.diagonal = (hi - lo).norm();

@@ -23,7 +23,7 @@ struct SurfaceMesh {
   std::vector<std::vector<std::uint32_t>> faces;
 
   bool empty() const { return faces.empty(); }
-  std::size_t numTriangles() const;  ///< triangles of a fan triangulation of every face
+  std::size_t numTriangles() const;  ///< sum of (valence - 2): at most the triangles of triangulateFace
   /// Throws InvalidInputError for indices out of range, faces with < 3 vertices or non-finite
   /// vertices. `what` names the mesh in the message.
   void validate(const std::string& what = "mesh") const;
@@ -49,7 +49,7 @@ MeshTopology analyseTopology(const SurfaceMesh& mesh);
 /// repeated consecutive indices. Returns the number of vertices removed.
 std::size_t weldVertices(SurfaceMesh& mesh, double tolerance);
 
-/// Sum of face areas (faces are assumed planar or nearly so; non-planar ones use a fan).
+/// Sum of face areas (of their triangles, triangulateFace).
 double surfaceArea(const SurfaceMesh& mesh);
 /// Signed volume by the divergence theorem: positive for a closed mesh with outward faces.
 double signedVolume(const SurfaceMesh& mesh);
@@ -59,7 +59,13 @@ Eigen::Vector3d faceNormal(const SurfaceMesh& mesh, std::size_t face);
 void boundingBox(const SurfaceMesh& mesh, Eigen::Vector3d& min, Eigen::Vector3d& max);
 /// Flips every face (reverses the vertex order).
 void flipFaces(SurfaceMesh& mesh);
-/// Every face as triangles (fan triangulation).
+/// The triangles of one face, appended to `out`. A convex face is fanned from its first corner. A
+/// non-convex one (an L-shaped top, a step's side; the assemblers merge a plane's faces into such
+/// polygons) is cut by ear clipping in its plane, after its straight corners are dropped, so
+/// that its triangles cover it exactly; a fan from a reflex corner would cover its notch too. A
+/// self-intersecting loop, which runs out of ears, gets the rest as a fan.
+void triangulateFace(const SurfaceMesh& mesh, std::size_t face, std::vector<std::vector<std::uint32_t>>& out);
+/// Every face as triangles (triangulateFace).
 SurfaceMesh triangulated(const SurfaceMesh& mesh);
 
 /// Points sampled uniformly by area on a mesh, each with the index of its face and the face normal.

@@ -42,7 +42,7 @@ struct PlanarFace {
 
 /// The ground truth of a plane-only mesh: its triangles grouped into planar faces.
 struct GroundTruth {
-  SurfaceMesh mesh;                      ///< the input, fan-triangulated
+  SurfaceMesh mesh;                      ///< the input, triangulated (paco::triangulated)
   std::vector<PlanarFace> faces;         ///< sorted by decreasing area
   std::vector<int> triangle_face;        ///< per triangle: index into faces, -1 for a degenerate one
   double diagonal = 0.0;                 ///< bounding-box diagonal of the mesh

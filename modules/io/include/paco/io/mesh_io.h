@@ -17,7 +17,7 @@ namespace paco::io {
 SurfaceMesh loadMesh(const std::string& path, bool allow_no_faces = false);
 
 /// Writes a polygon mesh by extension: .obj, .off, .ply (binary little-endian, double
-/// coordinates), .stl (binary float32, faces fan-triangulated). Text formats write the shortest
+/// coordinates), .stl (binary float32, faces triangulated by paco::triangulated). Text formats write the shortest
 /// text that reads back to the same double. Throws paco::IoError for an unwritable path, an
 /// unknown extension, or faces with fewer than 3 vertices or indices out of range.
 void saveMesh(const std::string& path, const SurfaceMesh& mesh);
