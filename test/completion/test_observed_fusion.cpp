@@ -342,6 +342,11 @@ TEST(ObservedFusion, TheRimOfAThinPlateIsFilled) {
     for (const auto& p : rim.points) middle = middle || std::abs(p.z - 0.02f) < 1e-6f;
     EXPECT_TRUE(middle) << "no point half-way up rim " << f;
   }
+  // A flat scan has no rim to fill: its box is no thicker than the fusion's plane tolerance
+  // (max_distance, 0.02 of the diagonal), and nothing is added.
+  ObservedFusionReport flat;
+  EXPECT_EQ(fuseWithObserved({}, {observed[1]}, ObservedFusionOptions{}, &flat).size(), 1u);
+  EXPECT_EQ(flat.filled_points, 0u) << describe(flat);
 }
 
 TEST(ObservedFusion, AKnownExtentMovesTheFilledFacesOutToIt) {

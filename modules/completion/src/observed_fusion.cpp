@@ -417,8 +417,10 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
     // The points of the faces a box face meets at its edges lie within half its width of its
     // middle: on a face narrower than twice the radius (the rim of a plate or a floor slab, a few
     // percent of the diagonal thick) they would cover it all, and the fill would leave the rim
-    // open. A quarter of its width keeps its middle half.
-    const double narrow_radius = std::min(radius, 0.25 * std::min(hi[u] - lo[u], hi[v] - lo[v]));
+    // open. A quarter of its width keeps its middle half. A face narrower than the fusion's plane
+    // tolerance is no rim: the two sides would be one plane, and a flat scan has no thickness.
+    const double width = std::min(hi[u] - lo[u], hi[v] - lo[v]);
+    const double narrow_radius = width > max_offset ? std::min(radius, 0.25 * width) : radius;
     // At least four steps across, so that a narrow face keeps rows in its middle half.
     const int nu = std::max(kMinFillSteps, static_cast<int>(std::ceil((hi[u] - lo[u]) / step)));
     const int nv = std::max(kMinFillSteps, static_cast<int>(std::ceil((hi[v] - lo[v]) / step)));

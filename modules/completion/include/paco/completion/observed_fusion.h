@@ -56,8 +56,9 @@ struct ObservedFusionOptions {
   /// Covers the faces of the observed points' box (on the dominant seen axes) with a grid of
   /// points of this spacing (fraction of the box diagonal, at least kMinFillSpacing; 0 = off;
   /// at least four steps across a face), keeping those farther than `fill_empty_radius` (on a
-  /// face narrower than four times that, a quarter of its width, so that the rim of a thin plate
-  /// is not covered by the points of its two sides) from every fused point and outside the
+  /// face narrower than four times that but wider than `max_distance`, a quarter of its width, so
+  /// that the rim of a thin plate is not covered by the points of its two sides) from every
+  /// fused point and outside the
   /// space the scan shows empty (in front of a seen surface, looking along a box axis: over a
   /// seen step, notch or chamfer the part's boundary is that surface, not the box face). Each
   /// face's points join a fused primitive on (nearly) the face's plane, or become a new
