@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
+
 #include <Eigen/Geometry>
 
 namespace {
@@ -153,6 +156,48 @@ TEST(SurfaceMesh, ANonConvexFaceIsTriangulatedAndSampledWithinItself) {
   const Eigen::Matrix3d r = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   for (auto& v : turned.vertices) v = r * v;
   EXPECT_NEAR(paco::surfaceArea(turned), 3.0, 1e-9);
+}
+
+TEST(SurfaceMesh, RandomStarShapedFacesAreCutIntoTrianglesOfTheirExactArea) {
+  // Star-shaped polygons with random radii are simple and mostly non-convex. Their triangles must
+  // add up to the polygon's (shoelace) area, none may be flipped, and none may overlap another
+  // (then the areas would add up to more).
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> radius(0.2, 1.0), jitter(-0.3, 0.3);
+  std::size_t non_convex = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int n = 4 + trial % 12;
+    paco::SurfaceMesh m;
+    std::vector<std::uint32_t> loop;
+    double shoelace = 0.0;
+    for (int k = 0; k < n; ++k) {
+      const double angle = 2.0 * 3.14159265358979 * (k + 0.5 + jitter(rng)) / n, r = radius(rng);
+      m.vertices.emplace_back(r * std::cos(angle), r * std::sin(angle), 0.0);
+      loop.push_back(static_cast<std::uint32_t>(k));
+    }
+    for (int k = 0; k < n; ++k) {
+      const Eigen::Vector3d& a = m.vertices[k];
+      const Eigen::Vector3d& b = m.vertices[(k + 1) % n];
+      shoelace += 0.5 * (a.x() * b.y() - b.x() * a.y());
+    }
+    m.faces = {loop};
+    bool convex = true;
+    for (int k = 0; k < n; ++k) {
+      const Eigen::Vector3d e1 = m.vertices[(k + 1) % n] - m.vertices[k], e2 = m.vertices[(k + 2) % n] - m.vertices[(k + 1) % n];
+      convex = convex && e1.cross(e2).z() >= 0.0;
+    }
+    non_convex += !convex;
+    std::vector<std::vector<std::uint32_t>> triangles;
+    paco::triangulateFace(m, 0, triangles);
+    double area = 0.0;
+    for (const auto& t : triangles) {
+      const double z = (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).z();
+      EXPECT_GE(z, -1e-12) << "trial " << trial;
+      area += 0.5 * std::abs(z);
+    }
+    EXPECT_NEAR(area, shoelace, 1e-9 * std::max(1.0, shoelace)) << "trial " << trial << ", " << n << " corners";
+  }
+  EXPECT_GT(non_convex, 100u);  // the test is about non-convex faces
 }
 
 TEST(SurfaceMesh, ValidateRejectsBadIndicesAndNaN) {
