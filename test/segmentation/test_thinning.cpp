@@ -192,7 +192,7 @@ TEST(StrayPoints, ASparseCloudOrMoreFarPointsThanStraysHaveIsKept) {
   EXPECT_TRUE(findStrayPoints(sparse).empty());
   // A 2,000-point box and 11 single points far from it and from each other: one more than 0.5 %
   // of the points, so none is stray; with 10 of them, all are.
-  // (On a sphere of radius 40 about the box, at least 20 apart: each is a group of its own.)
+  // (On a sphere of radius 40 about the box, more than 30 apart: each is a group of its own.)
   std::vector<Eigen::Vector3f> far;
   for (int i = 0; i < 11; ++i) {
     const float z = 1.0f - 2.0f * (float(i) + 0.5f) / 11.0f, r = std::sqrt(1.0f - z * z), a = 2.4f * float(i);
