@@ -166,14 +166,19 @@ Eigen::Vector3d faceNormal(const SurfaceMesh& mesh, std::size_t face) {
   return len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
 }
 
+namespace {
+double triangleArea(const SurfaceMesh& mesh, const std::vector<std::uint32_t>& t) {
+  return 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+}
+}  // namespace
+
 double surfaceArea(const SurfaceMesh& mesh) {
   double area = 0;
   std::vector<std::vector<std::uint32_t>> triangles;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     triangles.clear();
     triangulateFace(mesh, f, triangles);
-    for (const auto& t : triangles)
-      area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+    for (const auto& t : triangles) area += triangleArea(mesh, t);
   }
   return area;
 }
@@ -201,9 +206,12 @@ void flipFaces(SurfaceMesh& mesh) {
 
 void triangulateFace(const SurfaceMesh& mesh, std::size_t face, std::vector<std::vector<std::uint32_t>>& out) {
   const std::vector<std::uint32_t>& polygon = mesh.faces[face];
+  const auto fan = [&out](const std::vector<std::uint32_t>& loop) {
+    for (std::size_t k = 1; k + 1 < loop.size(); ++k) out.push_back({loop[0], loop[k], loop[k + 1]});
+  };
   const bool finite = std::all_of(polygon.begin(), polygon.end(), [&](std::uint32_t i) { return mesh.vertices[i].allFinite(); });
   if (polygon.size() == 3 || !finite) {  // a non-finite corner stays in a triangle, for validate() to find
-    for (std::size_t k = 1; k + 1 < polygon.size(); ++k) out.push_back({polygon[0], polygon[k], polygon[k + 1]});
+    fan(polygon);
     return;
   }
   // Work in 2D: drop the largest coordinate of the (Newell) normal, keeping counter-clockwise
@@ -228,7 +236,7 @@ void triangulateFace(const SurfaceMesh& mesh, std::size_t face, std::vector<std:
   bool convex = true;
   for (std::size_t k = 0; k < polygon.size() && convex; ++k) convex = cornerAt(polygon, k) >= -straight;
   if (convex) {  // a fan, as always: convex faces sample exactly as before ear clipping existed
-    for (std::size_t k = 1; k + 1 < polygon.size(); ++k) out.push_back({polygon[0], polygon[k], polygon[k + 1]});
+    fan(polygon);
     return;
   }
   // Straight corners first: dropping one leaves the same polygon, and ears never straddle it.
@@ -261,7 +269,7 @@ void triangulateFace(const SurfaceMesh& mesh, std::size_t face, std::vector<std:
     if (!clipped) break;
   }
   if (ring.size() == 3 && std::abs(turn(at(ring[0]), at(ring[1]), at(ring[2]))) <= straight) return;
-  for (std::size_t k = 1; k + 1 < ring.size(); ++k) out.push_back({ring[0], ring[k], ring[k + 1]});
+  fan(ring);
 }
 
 SurfaceMesh triangulated(const SurfaceMesh& mesh) {
@@ -283,7 +291,7 @@ SurfaceSample sampleSurface(const SurfaceMesh& mesh, std::size_t count, std::uin
     pieces.clear();
     triangulateFace(mesh, fi, pieces);
     for (const auto& t : pieces) {
-      const double a = 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+      const double a = triangleArea(mesh, t);
       if (!(a > 0)) continue;
       total += a;
       triangles.push_back({static_cast<std::uint32_t>(fi), t[0], t[1], t[2]});

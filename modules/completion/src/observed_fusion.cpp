@@ -409,9 +409,9 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
   struct Face {
     Plane plane;
     std::vector<Eigen::Vector3d> points;
+    double empty_radius;  // `radius`, capped for a narrow face (below)
   };
   std::vector<Face> faces;
-  std::vector<double> face_radius;  // radius, capped for a narrow face (below)
   for (int axis = 0; axis < 3; ++axis) {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     // The points of the faces a box face meets at its edges lie within half its width of its
@@ -429,6 +429,7 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
       local[axis] = side ? hi[axis] : lo[axis];
       Face face;
       face.plane = Plane::fromPointAndNormal(seen.axes * local, (side ? 1.0 : -1.0) * seen.axes.col(axis));
+      face.empty_radius = narrow_radius;
       for (int i = 0; i <= nu; ++i)
         for (int j = 0; j <= nv; ++j) {
           local[u] = lo[u] + (hi[u] - lo[u]) * i / nu;
@@ -436,7 +437,6 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
           face.points.push_back(seen.axes * local);
         }
       faces.push_back(std::move(face));
-      face_radius.push_back(narrow_radius);
     }
   }
   std::vector<const pcl::PointCloud<pcl::PointNormal>*> clouds;
@@ -446,11 +446,10 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
   const std::vector<double> distances = nearestDistances(all, clouds);
   std::size_t next = 0;
   std::optional<SeenFreeSpace> free_space;  // built once some box point is uncovered
-  for (std::size_t k = 0; k < faces.size(); ++k) {
-    const Face& face = faces[k];
+  for (const auto& face : faces) {
     std::vector<Eigen::Vector3d> empty;
     for (const auto& q : face.points) {
-      if (distances[next++] <= face_radius[k]) continue;
+      if (distances[next++] <= face.empty_radius) continue;
       if (!free_space) free_space.emplace(observed, options.min_observed_points, seen.axes, radius);
       if (free_space->showsEmpty(q)) {
         ++counts.fill_in_seen_free_space;

@@ -125,6 +125,9 @@ std::size_t removeRepeatedPoints(const pcl::PointCloud<PointT>& input, pcl::Poin
 
 namespace {
 
+/// The most points that may be stray among `points`: 0.5 % of them, at least 1.
+std::size_t strayLimit(std::size_t points) { return std::max<std::size_t>(1, points / 200); }
+
 /// One round of findStrayPoints over the points `source` of `cloud` (finite ones).
 template <typename PointT>
 std::vector<int> strayPointsAmong(const pcl::PointCloud<PointT>& cloud, const std::vector<int>& source) {
@@ -188,7 +191,7 @@ std::vector<int> strayPointsAmong(const pcl::PointCloud<PointT>& cloud, const st
   Eigen::AlignedBox3f main_box;
   for (int i : members[main]) main_box.extend((*finite)[static_cast<std::size_t>(i)].getVector3fMap());
   const double reach = main_box.diagonal().norm();
-  const std::size_t largest_stray = std::max<std::size_t>(1, finite->size() / 200);
+  const std::size_t largest_stray = strayLimit(finite->size());
   pcl::KdTreeFLANN<PointT> all;
   all.setInputCloud(finite);
   std::vector<int> strays;
@@ -219,8 +222,8 @@ std::vector<int> findStrayPoints(const pcl::PointCloud<PointT>& cloud) {
     if (pcl::isFinite(cloud[i])) kept.push_back(static_cast<int>(i));
   // A far stray stretches the box, and with it the link, so that a nearer stray group joins the
   // part; without the far one, the next round separates it. Rarely more than two rounds.
-  // In all at most 0.5 % of the points (at least 1), as for one group.
-  const std::size_t budget = std::max<std::size_t>(1, kept.size() / 200);
+  // In all no more than one group may hold.
+  const std::size_t budget = strayLimit(kept.size());
   std::vector<int> strays;
   for (int round = 0; round < 4; ++round) {
     std::vector<int> found = strayPointsAmong(cloud, kept);
