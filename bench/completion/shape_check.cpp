@@ -1,5 +1,5 @@
 // The whole pipeline on shapes unlike MFCAD's cube-stock parts, as a user's scans might be: thin
-// plates and slabs, a sheet-metal bracket, stairs, a building scanned without its ground. Each
+// plates and slabs, sheet-metal profiles, stairs, a building scanned without its ground or its roof. Each
 // shape is sampled uniformly by area (normals left for the segmenter to estimate, as in an .xyz
 // scan), run through `paco` as paco_reconstruct runs it (the shipped model or MODEL, four turns,
 // fusion and the box fill), and scored against the true mesh. Prints a Markdown table
@@ -49,8 +49,15 @@ std::vector<Shape> shapes() {
                                             {0.5, 0.75}, {0.25, 0.75}, {0.25, 1}, {0, 1}},
                                            1.0),
                   everywhere});
-  list.push_back({"L-shaped building 20 x 20 x 6 m, no ground", makePrism({{0, 0}, {20, 0}, {20, 8}, {8, 8}, {8, 20}, {0, 20}}, 6.0),
+  const auto building = [] { return makePrism({{0, 0}, {20, 0}, {20, 8}, {8, 8}, {8, 20}, {0, 20}}, 6.0); };
+  list.push_back({"L-shaped building 20 x 20 x 6 m, no ground", building(),
                   [](const Eigen::Vector3d& p, const Eigen::Vector3d&) { return p.z() > 1e-6; }});
+  list.push_back({"the same building, its walls only", building(),
+                  [](const Eigen::Vector3d&, const Eigen::Vector3d& n) { return std::abs(n.z()) < 0.5; }});
+  list.push_back({"sheet-metal U channel, 0.05 thick", makePrism({{0, 0}, {1, 0}, {1, 0.6}, {0.95, 0.6}, {0.95, 0.05},
+                                                                  {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}},
+                                                                 1.0),
+                  everywhere});
   return list;
 }
 

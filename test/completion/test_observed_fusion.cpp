@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace paco {
@@ -347,6 +348,79 @@ TEST(ObservedFusion, TheRimOfAThinPlateIsFilled) {
   ObservedFusionReport flat;
   EXPECT_EQ(fuseWithObserved({}, {observed[1]}, ObservedFusionOptions{}, &flat).size(), 1u);
   EXPECT_EQ(flat.filled_points, 0u) << describe(flat);
+}
+
+// A rectangle on the plane through `corner` spanned by `a` and `b`, as an na x nb grid of points
+// (cell centres) with the given outward normal.
+PlanarPrimitive rectangle(const Eigen::Vector3d& corner, const Eigen::Vector3d& a, const Eigen::Vector3d& b, int na,
+                          int nb, const Eigen::Vector3d& normal) {
+  PlanarPrimitive primitive;
+  primitive.plane = Plane::fromPointAndNormal(corner, normal);
+  primitive.confidence = 1.0f;
+  for (int i = 0; i < na; ++i)
+    for (int j = 0; j < nb; ++j) {
+      const Eigen::Vector3d q = corner + (i + 0.5) / na * a + (j + 0.5) / nb * b;
+      pcl::PointNormal p;
+      p.getVector3fMap() = q.cast<float>();
+      p.getNormalVector3fMap() = normal.cast<float>();
+      primitive.points.push_back(p);
+    }
+  return primitive;
+}
+
+TEST(ObservedFusion, TheEndsOfAProfileSeenOnlyFromItsSidesAreClosedOverTheProfile) {
+  // An L profile of sheet metal 0.05 thick (legs x 0..1 and y 0..0.8), 1 tall along z, seen on
+  // its long sides only, points 0.02 apart: the end x = 1 of one leg and both ends along z were too
+  // thin to segment. Every seen plane is parallel to z, so no plane can close the solid there, and
+  // the walls' own points cover the box faces.
+  const Eigen::Vector3d up(0, 0, 1);
+  const std::vector<PlanarPrimitive> observed = {
+      rectangle({0, 0, 0}, {1, 0, 0}, up, 50, 50, {0, -1, 0}),         // outside of the long leg
+      rectangle({0.05, 0.05, 0}, {0.95, 0, 0}, up, 48, 50, {0, 1, 0}),  // its inside
+      rectangle({0, 0, 0}, {0, 0.8, 0}, up, 40, 50, {-1, 0, 0}),        // outside of the short leg
+      rectangle({0.05, 0.05, 0}, {0, 0.75, 0}, up, 38, 50, {1, 0, 0}),  // its inside
+      rectangle({0, 0.8, 0}, {0.05, 0, 0}, up, 3, 50, {0, 1, 0})};      // its end
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved({}, observed, ObservedFusionOptions{}, &report);
+  EXPECT_GT(report.profile_cap_points, 0u) << describe(report);
+  // The profile: both legs, widened by the raster (cells of 1.5 spacings, 0.03).
+  const auto onProfile = [](const pcl::PointNormal& p) {
+    return (p.y <= 0.05f + 0.031f) || (p.x <= 0.05f + 0.031f);
+  };
+  std::size_t caps = 0;
+  for (const float z : {0.0f, 1.0f}) {
+    // On the seen box, which ends at the outermost rows of points, half a spacing in.
+    const auto cap = std::find_if(fused.begin(), fused.end(), [&](const PlanarPrimitive& primitive) {
+      return primitive.plane.normal.normalized().isApprox(Eigen::Vector3d(0, 0, z > 0.5f ? 1 : -1), 1e-9) &&
+             std::abs(primitive.plane.signedDistance(Eigen::Vector3d(0.5, 0.5, z))) < 0.011;
+    });
+    ASSERT_NE(cap, fused.end()) << "no cap at z = " << z << ": " << describe(report);
+    ++caps;
+    bool long_leg = false, short_leg = false;
+    for (const auto& p : cap->points) {
+      EXPECT_TRUE(onProfile(p)) << "cap point in the L's opening: " << p.x << " " << p.y;
+      EXPECT_NEAR(p.z, z, 0.011f);
+      long_leg = long_leg || (p.x > 0.5f && p.x < 0.6f && p.y < 0.05f);
+      short_leg = short_leg || (p.y > 0.4f && p.y < 0.5f && p.x < 0.05f);
+    }
+    EXPECT_TRUE(long_leg && short_leg) << "the cap at z = " << z << " misses a leg";
+  }
+  EXPECT_EQ(caps, 2u);
+  // The long leg's end reaches the box face x = 1, where no plane lies: that face closes it, over
+  // the leg's width only.
+  const auto end = std::find_if(fused.begin(), fused.end(), [](const PlanarPrimitive& primitive) {
+    return primitive.plane.normal.normalized().isApprox(Eigen::Vector3d(1, 0, 0), 1e-9) &&
+           std::abs(primitive.plane.signedDistance(Eigen::Vector3d(1, 0, 0))) < 0.011;
+  });
+  ASSERT_NE(end, fused.end()) << describe(report);
+  ASSERT_GE(end->points.size(), 10u);  // the assemblers drop a primitive with fewer
+  for (const auto& p : end->points) EXPECT_LE(p.y, 0.05f + 0.031f);
+  // With one seen cap the profile is not open along z, and nothing is added.
+  std::vector<PlanarPrimitive> capped = observed;
+  capped.push_back(rectangle({0, 0, 1}, {1, 0, 0}, {0, 0.05, 0}, 50, 3, {0, 0, 1}));
+  ObservedFusionReport with_cap;
+  fuseWithObserved({}, capped, ObservedFusionOptions{}, &with_cap);
+  EXPECT_EQ(with_cap.profile_cap_points, 0u) << describe(with_cap);
 }
 
 TEST(ObservedFusion, AKnownExtentMovesTheFilledFacesOutToIt) {

@@ -191,6 +191,26 @@ std::size_t thinOut(pcl::PointCloud<pcl::PointNormal>& points, double fraction, 
   });
 }
 
+// The median distance from a seen point to its nearest other seen point (0 for fewer than two).
+double medianSpacing(const std::vector<PlanarPrimitive>& observed) {
+  std::vector<float> rows;
+  for (const auto& segment : observed)
+    for (const auto& p : segment.points) rows.insert(rows.end(), {p.x, p.y, p.z});
+  const std::size_t count = rows.size() / 3;
+  if (count < 2) return 0.0;
+  std::vector<std::int64_t> nearest(count);
+  completion::detail::nearestOtherPoint(rows.data(), static_cast<std::int64_t>(count), nearest.data());
+  std::vector<double> spacing(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t j = static_cast<std::size_t>(nearest[i]);
+    spacing[i] = (Eigen::Map<const Eigen::Vector3f>(&rows[3 * i]).cast<double>() -
+                  Eigen::Map<const Eigen::Vector3f>(&rows[3 * j]).cast<double>())
+                     .norm();
+  }
+  std::nth_element(spacing.begin(), spacing.begin() + static_cast<std::ptrdiff_t>(count / 2), spacing.end());
+  return spacing[count / 2];
+}
+
 // What the scan's trusted segments show along lines of sight: for a point and one of a few
 // directions, the first seen point met each way along the line through it (within `radius` of
 // the line, and more than `gap` from the point along it). Segments seen edge-on (more than 60
@@ -291,21 +311,10 @@ class ScannerView {
   ScannerView(const std::vector<PlanarPrimitive>& observed, const ObservedFusionOptions& options, double diagonal)
       : tolerance_(options.scanner_cell * diagonal) {
     std::vector<Eigen::Vector3d> seen;
-    std::vector<float> rows;
     for (const auto& segment : observed)
-      for (const auto& p : segment.points) {
-        seen.push_back(position(p));
-        rows.insert(rows.end(), {p.x, p.y, p.z});
-      }
-    if (seen.size() >= 2) {
-      // On a sparse scan a line of sight between two seen points must still count as seen.
-      std::vector<std::int64_t> nearest(seen.size());
-      completion::detail::nearestOtherPoint(rows.data(), static_cast<std::int64_t>(seen.size()), nearest.data());
-      std::vector<double> spacing(seen.size());
-      for (std::size_t i = 0; i < seen.size(); ++i) spacing[i] = (seen[i] - seen[static_cast<std::size_t>(nearest[i])]).norm();
-      std::nth_element(spacing.begin(), spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2), spacing.end());
-      tolerance_ = std::max(tolerance_, kSpacings * spacing[spacing.size() / 2]);
-    }
+      for (const auto& p : segment.points) seen.push_back(position(p));
+    // On a sparse scan a line of sight between two seen points must still count as seen.
+    tolerance_ = std::max(tolerance_, kSpacings * medianSpacing(observed));
     if (seen.empty() || !(tolerance_ > 0.0)) return;
     origin_ = seen.front();
     if (options.scanner_position) {
@@ -503,6 +512,163 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
   }
 }
 
+// A raster cell is this many of the seen points' median spacings wide: every cell along a seen
+// wall then holds a point, so that the wall's outline has no holes for the flood to leak through.
+constexpr double kProfileCellSpacings = 1.5;
+// At most this many cells along a side of the raster (a scan with a few far points has a small
+// median spacing but a large box).
+constexpr int kMaxProfileCells = 1000;
+
+// The box axis every fused plane is parallel to (within max_angle), when there is exactly one:
+// the primitives are the sides of a prism along it, and none can close its ends. -1 otherwise
+// (also when all planes are parallel to two axes: a flat scan has no thickness to close).
+int profileAxis(const SeenBox& seen, const std::vector<PlanarPrimitive>& fused, double max_angle) {
+  int found = -1;
+  for (int k = 0; k < 3; ++k) {
+    const bool all_parallel = std::all_of(fused.begin(), fused.end(), [&](const PlanarPrimitive& primitive) {
+      return std::abs(primitive.plane.normal.normalized().dot(seen.axes.col(k))) <= std::sin(max_angle);
+    });
+    if (!all_parallel) continue;
+    if (found >= 0) return -1;
+    found = k;
+  }
+  return found;
+}
+
+// Closes the two ends of a prism (profileAxis): a sheet-metal profile whose end faces are a few
+// point spacings wide, an extrusion or a building's walls scanned from the side. The box fill
+// leaves those ends open: near a thin wall the wall's own points cover the box face. Every fused
+// point is projected along the axis onto a raster; the cells the flood from the raster's border
+// cannot reach through empty cells are the profile (its walls and what they enclose; a profile
+// with an opening, such as an L or a U, lets the flood into the opening). Each end gets a point
+// per profile cell, on the box face, as a new primitive.
+void capProfileEnds(const SeenBox& seen, const std::vector<PlanarPrimitive>& observed, double max_angle,
+                    double max_distance, std::vector<PlanarPrimitive>& fused, ObservedFusionReport& counts) {
+  if (seen.box.isEmpty() || fused.empty()) return;
+  const double max_offset = max_distance * seen.box.diagonal().norm();
+  const int axis = profileAxis(seen, fused, max_angle);
+  if (axis < 0) return;
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const Eigen::Vector3d lo = seen.box.min(), hi = seen.box.max();
+  const double extent = std::max(hi[u] - lo[u], hi[v] - lo[v]);
+  const double cell = std::max(kProfileCellSpacings * medianSpacing(observed), extent / kMaxProfileCells);
+  if (!(cell > 0.0)) return;
+  // One empty cell of margin all round, so that the flood starts outside the profile.
+  const int nu = static_cast<int>(std::ceil((hi[u] - lo[u]) / cell)) + 3;
+  const int nv = static_cast<int>(std::ceil((hi[v] - lo[v]) / cell)) + 3;
+  const auto index = [&](int i, int j) { return static_cast<std::size_t>(i) * static_cast<std::size_t>(nv) + j; };
+  std::vector<char> occupied(static_cast<std::size_t>(nu) * static_cast<std::size_t>(nv), 0);
+  for (const auto& primitive : fused)
+    for (const auto& p : primitive.points) {
+      const Eigen::Vector3d local = seen.axes.transpose() * position(p);
+      const int i = static_cast<int>(std::floor((local[u] - lo[u]) / cell)) + 1;
+      const int j = static_cast<int>(std::floor((local[v] - lo[v]) / cell)) + 1;
+      if (i >= 0 && i < nu && j >= 0 && j < nv) occupied[index(i, j)] = 1;
+    }
+  // Walls grown by one cell, so that a gap of a cell between seen points does not let the flood in.
+  std::vector<char> wall = occupied;
+  for (int i = 1; i + 1 < nu; ++i)
+    for (int j = 1; j + 1 < nv; ++j)
+      if (occupied[index(i, j)])
+        for (int di = -1; di <= 1; ++di)
+          for (int dj = -1; dj <= 1; ++dj) wall[index(i + di, j + dj)] = 1;
+  std::vector<char> outside(occupied.size(), 0);
+  std::vector<std::pair<int, int>> stack;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j)
+      if ((i == 0 || j == 0 || i == nu - 1 || j == nv - 1) && !wall[index(i, j)]) {
+        outside[index(i, j)] = 1;
+        stack.emplace_back(i, j);
+      }
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+      const int a = i + di, b = j + dj;
+      if (a < 0 || b < 0 || a >= nu || b >= nv || wall[index(a, b)] || outside[index(a, b)]) continue;
+      outside[index(a, b)] = 1;
+      stack.emplace_back(a, b);
+    }
+  }
+  // The profile: cells the flood did not reach, without the ring the walls grew by (a grown cell
+  // next to a reached one).
+  const auto nextToOutside = [&](int i, int j) {
+    for (int di = -1; di <= 1; ++di)
+      for (int dj = -1; dj <= 1; ++dj) {
+        const int a = i + di, b = j + dj;
+        if (a >= 0 && b >= 0 && a < nu && b < nv && outside[index(a, b)]) return true;
+      }
+    return false;
+  };
+  std::vector<char> in_profile(occupied.size(), 0);
+  std::size_t profile_cells = 0;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j)
+      if (!outside[index(i, j)] && (occupied[index(i, j)] || !nextToOutside(i, j))) {
+        in_profile[index(i, j)] = 1;
+        ++profile_cells;
+      }
+  if (profile_cells == 0) return;
+  const auto centre = [&](int k, int i) { return std::clamp(lo[k] + (i - 0.5) * cell, lo[k], hi[k]); };
+  const auto addPrimitive = [&](const Plane& plane, const std::vector<Eigen::Vector3d>& locals) {
+    PlanarPrimitive face;
+    face.plane = plane;
+    // As a box face: below a seen face, above the network's guesses.
+    face.confidence = 0.99f;
+    for (const Eigen::Vector3d& local : locals) {
+      pcl::PointNormal p;
+      p.getVector3fMap() = (seen.axes * local).cast<float>();
+      p.getNormalVector3fMap() = plane.normal.normalized().cast<float>();
+      face.points.push_back(p);
+    }
+    counts.profile_cap_points += face.points.size();
+    fused.push_back(std::move(face));
+  };
+  for (int side = 0; side < 2; ++side) {
+    Eigen::Vector3d local;
+    local[axis] = side ? hi[axis] : lo[axis];
+    std::vector<Eigen::Vector3d> locals;
+    for (int i = 0; i < nu; ++i)
+      for (int j = 0; j < nv; ++j)
+        if (in_profile[index(i, j)]) {
+          local[u] = centre(u, i);
+          local[v] = centre(v, j);
+          locals.push_back(local);
+        }
+    addPrimitive(Plane::fromPointAndNormal(seen.axes * local, (side ? 1.0 : -1.0) * seen.axes.col(axis)), locals);
+  }
+  // Where the profile reaches a side of the box and no plane lies on that side, the box face
+  // closes it there: the end of a leg too thin for the segmenter, cut off at the scan's extent.
+  const int steps = std::max(1, static_cast<int>(std::ceil((hi[axis] - lo[axis]) / cell)));
+  const std::size_t side_planes = fused.size() - 2;  // not the two caps
+  for (int across : {u, v}) {
+    const int along = across == u ? v : u;
+    for (int side = 0; side < 2; ++side) {
+      Eigen::Vector3d local = (lo + hi) / 2.0;
+      local[across] = side ? hi[across] : lo[across];
+      const Plane plane = Plane::fromPointAndNormal(seen.axes * local, (side ? 1.0 : -1.0) * seen.axes.col(across));
+      const bool closed = std::any_of(fused.begin(), fused.begin() + static_cast<std::ptrdiff_t>(side_planes),
+                                      [&](const PlanarPrimitive& primitive) {
+                                        return primitive.plane.unorientedAngleTo(plane) <= max_angle &&
+                                               std::abs(primitive.plane.signedDistance(seen.axes * local)) <= max_offset;
+                                      });
+      if (closed) continue;
+      std::vector<Eigen::Vector3d> locals;
+      for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+          const int cell_across = across == u ? i : j, cell_along = across == u ? j : i;
+          if (!in_profile[index(i, j)] || std::abs(centre(across, cell_across) - local[across]) > cell) continue;
+          for (int t = 0; t <= steps; ++t) {
+            local[along] = centre(along, cell_along);
+            local[axis] = lo[axis] + (hi[axis] - lo[axis]) * t / steps;
+            locals.push_back(local);
+          }
+        }
+      if (!locals.empty()) addPrimitive(plane, locals);
+    }
+  }
+}
+
 // Seen points farther than this (fraction of the diagonal) along a face's normal count as a
 // surface in front of or behind it: beyond the scatter of the face's own seen points about its
 // plane (the segmenter's inlier distance is 0.004 by default), so they never do.
@@ -559,6 +725,9 @@ std::string describe(const ObservedFusionReport& report) {
          (report.fill_in_seen_free_space ? ", " + std::to_string(report.fill_in_seen_free_space) +
                                                " box points left out in space the scan shows empty"
                                          : "") +
+         (report.profile_cap_points ? ", " + std::to_string(report.profile_cap_points) +
+                                          " points close the two ends of a profile (every plane is parallel to one axis)"
+                                    : "") +
          (report.thinned_points
               ? ", " + std::to_string(report.thinned_points) + " points of unseen primitives thinned out"
               : "") +
@@ -744,8 +913,10 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     fused.push_back(std::move(primitive));
     seen_face.push_back(true);
   }
-  if (options.fill_spacing > 0.0 && !observed.empty())
+  if (options.fill_spacing > 0.0 && !observed.empty()) {
     fillSeenBox(seen_box, observed, options, fused, seen_face, counts);
+    capProfileEnds(seen_box, observed, max_angle, options.max_distance, fused, counts);
+  }
   if (report) *report = counts;
   return fused;
 }

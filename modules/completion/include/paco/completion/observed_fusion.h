@@ -67,6 +67,11 @@ struct ObservedFusionOptions {
   /// PolyFit closes an under-supported hidden side with too small a solid (median volume 0.51
   /// of the part's at 75 % missing); most scans of a part span its extent, and the box faces
   /// give that side an outer hull where the network put nothing (doc/results.md).
+  /// When every fused plane is then parallel (within `max_angle_degrees`) to one box axis, none
+  /// can close the ends along it: the primitives are the sides of a prism, such as a sheet-metal
+  /// profile whose end faces are too thin for the segmenter or a building's walls scanned from
+  /// the side. Both box faces across that axis are then added over the profile: the cells of a
+  /// raster (1.5 seen-point spacings) that the fused points, projected along the axis, enclose.
   double fill_spacing = 0.02;
   double fill_empty_radius = 0.05;
   /// The network's points of a seen face that the scan contradicts are dropped (fraction of the
@@ -137,6 +142,9 @@ struct ObservedFusionReport {
   std::size_t filled_faces = 0;    ///< box faces added as new primitives (the rest joined one)
   std::size_t box_faces_taken = 0; ///< unseen completed primitives that hosted box-face points and took the face's plane
   std::size_t fill_in_seen_free_space = 0;  ///< uncovered box-face points left out: the scan shows them in empty space
+  /// Points of the two box faces added across the one axis every fused plane was parallel to (the
+  /// ends of a profile; see ObservedFusionOptions::fill_spacing)
+  std::size_t profile_cap_points = 0;
   std::size_t thinned_points = 0;  ///< points of unseen completed primitives left out (unseen_point_fraction)
   std::size_t contradicted_points = 0;  ///< the network's points of seen faces the scan contradicts, dropped
   std::size_t seen_empty_points = 0;   ///< completed points the scanner would have seen, dropped (scanner_direction/position)
