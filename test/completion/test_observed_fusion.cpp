@@ -340,8 +340,8 @@ TEST(ObservedFusion, TheRimOfAThinPlateIsFilled) {
         << rim.plane.normal.transpose();
     EXPECT_GE(rim.points.size(), 10u);  // the assemblers drop a primitive with fewer
     bool middle = false;
-    for (const auto& p : rim.points) middle = middle || std::abs(p.z - 0.02f) < 1e-6f;
-    EXPECT_TRUE(middle) << "no point half-way up rim " << f;
+    for (const auto& p : rim.points) middle = middle || std::abs(p.z - 0.02f) < 0.01f;
+    EXPECT_TRUE(middle) << "no point in the middle half of rim " << f;
   }
   // A flat scan has no rim to fill: its box is no thicker than the fusion's plane tolerance
   // (max_distance, 0.02 of the diagonal), and nothing is added.
@@ -447,17 +447,16 @@ TEST(ObservedFusion, AKnownExtentMovesTheFilledFacesOutToIt) {
     const PlanarPrimitive& face = fused[3 + f];
     EXPECT_TRUE(face.plane.normal.isApprox(expected_normals[f], 1e-9)) << face.plane.normal.transpose();
     EXPECT_NEAR(face.plane.signedDistance(expected_offsets[f] * expected_normals[f].cwiseAbs()), 0.0, 1e-6);
-    // The faces span the grown box: x up to 1.5, y up to 1.2.
+    // The faces span the grown box: x up to 1.5, y up to 1.2, less half a grid step (the grid's
+    // points are the centres of its cells, 0.05 of the box's diagonal of about 2.1 wide).
     double x_max = 0.0, y_max = 0.0;
     for (const auto& p : face.points) {
       x_max = std::max(x_max, double(p.x));
       y_max = std::max(y_max, double(p.y));
     }
-    if (f == 0) {
-      EXPECT_NEAR(y_max, 1.2, 1e-6);
-    } else {
-      EXPECT_NEAR(x_max, 1.5, 1e-6);
-    }
+    const double reach = f == 0 ? y_max : x_max, extent = f == 0 ? 1.2 : 1.5;
+    EXPECT_LT(reach, extent);
+    EXPECT_GT(reach, extent - 0.06);
   }
   // Points inside the seen box change nothing: the result of the test above.
   options.known_extent_points = {{0.5, 0.5, 0.5}};

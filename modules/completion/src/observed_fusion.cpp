@@ -439,10 +439,10 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
       Face face;
       face.plane = Plane::fromPointAndNormal(seen.axes * local, (side ? 1.0 : -1.0) * seen.axes.col(axis));
       face.empty_radius = narrow_radius;
-      for (int i = 0; i <= nu; ++i)
-        for (int j = 0; j <= nv; ++j) {
-          local[u] = lo[u] + (hi[u] - lo[u]) * i / nu;
-          local[v] = lo[v] + (hi[v] - lo[v]) * j / nv;
+      for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+          local[u] = lo[u] + (hi[u] - lo[u]) * (i + 0.5) / nu;
+          local[v] = lo[v] + (hi[v] - lo[v]) * (j + 0.5) / nv;
           face.points.push_back(seen.axes * local);
         }
       faces.push_back(std::move(face));
@@ -602,14 +602,22 @@ void capProfileEnds(const SeenBox& seen, const std::vector<PlanarPrimitive>& obs
   };
   std::vector<char> in_profile(occupied.size(), 0);
   std::size_t profile_cells = 0;
+  // Only cells over the box: the margin may hold walls grown into it, but no part of the profile.
+  const auto overTheBox = [&](int k, int i) { return i >= 1 && (i - 1) * cell < hi[k] - lo[k]; };
   for (int i = 0; i < nu; ++i)
     for (int j = 0; j < nv; ++j)
-      if (!outside[index(i, j)] && (occupied[index(i, j)] || !nextToOutside(i, j))) {
+      if (overTheBox(u, i) && overTheBox(v, j) && !outside[index(i, j)] &&
+          (occupied[index(i, j)] || !nextToOutside(i, j))) {
         in_profile[index(i, j)] = 1;
         ++profile_cells;
       }
   if (profile_cells == 0) return;
-  const auto centre = [&](int k, int i) { return std::clamp(lo[k] + (i - 0.5) * cell, lo[k], hi[k]); };
+  // The middle of the part of cell i along axis k inside the box: never on the box's faces, where
+  // PolyFit's candidate faces meet (a point on an edge between two of them is counted on one side
+  // or the other by rounding, which changed meshes from run to run).
+  const auto centre = [&](int k, int i) {
+    return 0.5 * (std::max(lo[k], lo[k] + (i - 1) * cell) + std::min(hi[k], lo[k] + i * cell));
+  };
   const auto addPrimitive = [&](const Plane& plane, const std::vector<Eigen::Vector3d>& locals) {
     PlanarPrimitive face;
     face.plane = plane;
@@ -658,9 +666,9 @@ void capProfileEnds(const SeenBox& seen, const std::vector<PlanarPrimitive>& obs
         for (int j = 0; j < nv; ++j) {
           const int cell_across = across == u ? i : j, cell_along = across == u ? j : i;
           if (!in_profile[index(i, j)] || std::abs(centre(across, cell_across) - local[across]) > cell) continue;
-          for (int t = 0; t <= steps; ++t) {
+          for (int t = 0; t < steps; ++t) {
             local[along] = centre(along, cell_along);
-            local[axis] = lo[axis] + (hi[axis] - lo[axis]) * t / steps;
+            local[axis] = lo[axis] + (hi[axis] - lo[axis]) * (t + 0.5) / steps;
             locals.push_back(local);
           }
         }
