@@ -515,12 +515,15 @@ std::vector<PlanarPrimitive> addBoundingBoxPrior(const pcl::PointCloud<pcl::Poin
       pcl::PointCloud<pcl::PointNormal> added;
       const int nu = std::max(1, static_cast<int>(std::ceil((hi[u] - lo[u]) / step)));
       const int nv = std::max(1, static_cast<int>(std::ceil((hi[v] - lo[v]) / step)));
-      for (int i = 0; i <= nu; ++i) {
-        for (int j = 0; j <= nv; ++j) {
+      // Cell centres, not corners: a point on the box's edge lies on an edge between PolyFit's
+      // candidate faces, where rounding decides which one counts it (doc/results.md, thirtieth
+      // session).
+      for (int i = 0; i < nu; ++i) {
+        for (int j = 0; j < nv; ++j) {
           Eigen::Vector3d local;
           local[axis] = coordinate;
-          local[u] = lo[u] + (hi[u] - lo[u]) * i / nu;
-          local[v] = lo[v] + (hi[v] - lo[v]) * j / nv;
+          local[u] = lo[u] + (hi[u] - lo[u]) * (i + 0.5) / nu;
+          local[v] = lo[v] + (hi[v] - lo[v]) * (j + 0.5) / nv;
           const Eigen::Vector3d x = centroid + axes * local;
           pcl::PointNormal pt;
           pt.x = static_cast<float>(x.x());

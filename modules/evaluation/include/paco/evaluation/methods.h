@@ -172,8 +172,9 @@ SurfaceMesh reconstructPoissonQem(const pcl::PointCloud<pcl::PointNormal>& point
                                   std::map<std::string, double>* seconds = nullptr);
 
 /// box-prior's completion on its own: `visible` primitives plus the six planes of the oriented
-/// bounding box of `cloud`, with points sampled on the parts of those faces that have no input
-/// point within `empty_radius` (fractions of the cloud's bounding-box diagonal). A box face that
+/// bounding box of `cloud`, with points (the centres of a grid of cells `spacing` wide) sampled on
+/// the parts of those faces that have no input point within `empty_radius` (fractions of the
+/// cloud's bounding-box diagonal). A box face that
 /// coincides with a visible primitive (within 10 degrees and 2 % of the diagonal) adds its points
 /// to that primitive instead of a new one.
 std::vector<PlanarPrimitive> addBoundingBoxPrior(const pcl::PointCloud<pcl::PointNormal>& cloud,
