@@ -58,6 +58,11 @@ std::vector<Shape> shapes() {
                                                                   {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}},
                                                                  1.0),
                   everywhere});
+  list.push_back({"I-beam, flanges and web 0.05 thick",
+                  makePrism({{0, 0}, {0.6, 0}, {0.6, 0.05}, {0.325, 0.05}, {0.325, 0.55}, {0.6, 0.55}, {0.6, 0.6},
+                             {0, 0.6}, {0, 0.55}, {0.275, 0.55}, {0.275, 0.05}, {0, 0.05}},
+                            1.0),
+                  everywhere});
   return list;
 }
 

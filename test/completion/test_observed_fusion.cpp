@@ -307,6 +307,14 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
     new_points += face.points.size();
     for (const auto& p : face.points) {
       EXPECT_LT(std::abs(face.plane.signedDistance({p.x, p.y, p.z})), 1e-6);
+      // Off the box's edges: there PolyFit's candidate faces meet, and rounding would decide
+      // which of them counts the point (half a step, 0.04, from the other faces of the box).
+      const Eigen::Vector3d box_lo(0, 0.05, 0), box_hi(0.95, 0.95, 0.9375);
+      for (int axis = 0; axis < 3; ++axis) {
+        if (std::abs(face.plane.normal[axis]) > 0.5) continue;
+        EXPECT_GT(std::min(p.getVector3fMap()[axis] - box_lo[axis], box_hi[axis] - p.getVector3fMap()[axis]), 0.03)
+            << "a point on an edge of the box: " << p.getVector3fMap().transpose();
+      }
       for (const auto& seen : observed)
         for (const auto& q : seen.points)
           ASSERT_GT((Eigen::Vector3d(p.x, p.y, p.z) - Eigen::Vector3d(q.x, q.y, q.z)).norm(), 0.05 * 1.6);
