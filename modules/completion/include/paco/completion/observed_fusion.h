@@ -168,7 +168,8 @@ std::string describe(const ObservedFusionReport& report);
 /// appended with confidence 1; unmatched completed primitives are kept, turned parallel to a seen
 /// direction when `align_unseen_degrees` allows, clipped to the observed box when `clip_margin`
 /// is finite, and thinned to `unseen_point_fraction` of their points; then the box faces are
-/// filled when `fill_spacing` > 0, on the box grown to `known_extent_points`; with a scanner
+/// filled when `fill_spacing` > 0, on the box grown to `known_extent_points` (and the ends of a
+/// profile closed, when every plane is parallel to one box axis); with a scanner
 /// direction or position, completed points the scanner would have seen go. Throws
 /// InvalidInputError on tolerances that are negative or not finite (the margin may be infinite),
 /// on a fraction outside (0, 1], on a known extent point that is not finite, and on a scanner
