@@ -221,7 +221,6 @@ void writeHalfBoxScan(const std::string& path, const Eigen::Matrix3d& turn) {
   }
   paco::io::saveCloud(path, scan);
 }
-}  // namespace
 
 // Runs paco_reconstruct on `input` with `assembler` and a tiny untrained model whose primitives
 // are all left out (--threshold 1): the seen faces and the box fill alone. Returns the tool's log;
@@ -242,6 +241,8 @@ std::string reconstructWithoutTheNetwork(const TempDir& dir, const std::string& 
   mesh = status == 0 ? paco::io::loadMesh(mesh_path) : paco::SurfaceMesh{};
   return log;
 }
+
+}  // namespace
 
 // A plate 1 x 1 x 0.04 scanned on its two sides only: the network adds nothing (--threshold 1), so
 // the rims come from the box fill. They are narrower than twice the fill's empty radius (0.05 of
