@@ -520,6 +520,31 @@ TEST(NoiseLevel, ReadsTheScatterOffTheSurface) {
   EXPECT_THROW(noisy->prepared().noiseLevel(20, 1.5), InvalidInputError);
 }
 
+// A wall little more than a point spacing thin, noise-free: every neighbourhood holds both of its
+// sides, two layers with nothing between them. That is not noise, and the level stays near 0 (it
+// read half the thickness before, 0.009).
+TEST(NoiseLevel, TheTwoSidesOfAThinWallAreNotNoise) {
+  pcl::PointCloud<pcl::PointNormal>::Ptr wall(new pcl::PointCloud<pcl::PointNormal>);
+  const float spacing = 0.02f, thickness = 0.025f;
+  for (const float z : {0.0f, thickness})
+    for (int i = 0; i < 50; ++i)
+      for (int j = 0; j < 50; ++j) {
+        pcl::PointNormal p;
+        p.x = spacing * i;
+        p.y = spacing * j;
+        p.z = z;
+        p.normal_x = p.normal_y = 0.0f;
+        p.normal_z = z > 0.0f ? 1.0f : -1.0f;
+        wall->push_back(p);
+      }
+  auto seg = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  seg->setInputCloud(wall);
+  PlanarSegmentation result;
+  seg->segment(result);
+  // The working frame has a unit diagonal (about 1.39 here): the sides are 0.018 apart in it.
+  EXPECT_LT(seg->prepared().noiseLevel(kNoiseNeighbours, kNoiseQuantile), 1e-3);
+}
+
 TEST(NoiseAdaptation, ANoisyBoxGetsOnePlanePerFace) {
   const LabelledSample box = noisyBox(0.01);
   // The tools' plane minimums alone: the inlier band (0.4 % of the diagonal) is far below the

@@ -36,6 +36,62 @@ Eigen::Vector3d principalVariances(const pcl::PointCloud<pcl::PointNormal>& clou
   return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly).eigenvalues();
 }
 
+// Residuals split at their widest gap count as two layers, not as scatter, when the gap is this
+// many times the layers' own spread: the two sides of a wall a few point spacings thin, or of a
+// shallow step, both in one neighbourhood. Noise on one surface has no such gap.
+constexpr double kLayerGapRatio = 4.0;
+// Each layer holds at least this many of the neighbours.
+constexpr std::size_t kMinLayerPoints = 3;
+
+// The covariance of `points` (about each group's own mean when `group` splits them; divided by
+// the count) and its eigen decomposition.
+Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pooledCovariance(const std::vector<Eigen::Vector3d>& points,
+                                                                const std::vector<int>& group) {
+  Eigen::Vector3d means[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  double counts[2] = {0.0, 0.0};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    means[group[i]] += points[i];
+    counts[group[i]] += 1.0;
+  }
+  for (int g = 0; g < 2; ++g)
+    if (counts[g] > 0.0) means[g] /= counts[g];
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d d = points[i] - means[group[i]];
+    covariance += d * d.transpose();
+  }
+  covariance /= static_cast<double>(points.size());
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance);
+}
+
+// The scatter of the points `indices` names off their best plane: the root-mean-square distance
+// to it, or, when the distances fall into two layers (kLayerGapRatio), the scatter of each layer
+// off its own plane (the layers' covariances pooled about their own means).
+double scatterOffSurface(const pcl::PointCloud<pcl::PointNormal>& cloud, const pcl::Indices& indices) {
+  const std::size_t n = indices.size();
+  std::vector<Eigen::Vector3d> points(n);
+  for (std::size_t i = 0; i < n; ++i) points[i] = cloud[static_cast<std::size_t>(indices[i])].getVector3fMap().cast<double>();
+  std::vector<int> group(n, 0);
+  const auto whole = pooledCovariance(points, group);
+  const double scatter = std::sqrt(std::max(0.0, whole.eigenvalues()[0]));
+  if (n < 2 * kMinLayerPoints) return scatter;
+  const Eigen::Vector3d normal = whole.eigenvectors().col(0);
+  std::vector<std::pair<double, std::size_t>> offsets(n);
+  for (std::size_t i = 0; i < n; ++i) offsets[i] = {points[i].dot(normal), i};
+  std::sort(offsets.begin(), offsets.end());
+  std::size_t split = 0;
+  double widest = 0.0;
+  for (std::size_t s = kMinLayerPoints; s + kMinLayerPoints <= n; ++s)
+    if (offsets[s].first - offsets[s - 1].first > widest) {
+      widest = offsets[s].first - offsets[s - 1].first;
+      split = s;
+    }
+  if (split == 0) return scatter;
+  for (std::size_t s = split; s < n; ++s) group[offsets[s].second] = 1;
+  const double layered = std::sqrt(std::max(0.0, pooledCovariance(points, group).eigenvalues()[0]));
+  return widest > kLayerGapRatio * layered ? layered : scatter;
+}
+
 }  // namespace
 
 const std::vector<std::vector<int>>& PreparedCloud::neighbours(int k) const {
@@ -70,7 +126,7 @@ double PreparedCloud::noiseLevel(int k, double quantile) const {
   std::vector<float> sq_distances;
   for (std::size_t i = 0; i < n; i += stride) {
     tree->nearestKSearch((*points)[i], wanted, found, sq_distances);
-    scatter.push_back(std::sqrt(std::max(0.0, principalVariances(*points, &found)[0])));
+    scatter.push_back(scatterOffSurface(*points, found));
   }
   const std::size_t at = std::min(scatter.size() - 1, static_cast<std::size_t>(quantile * static_cast<double>(scatter.size() - 1) + 0.5));
   std::nth_element(scatter.begin(), scatter.begin() + static_cast<std::ptrdiff_t>(at), scatter.end());

@@ -62,7 +62,9 @@ struct PreparedCloud {
   /// of its k nearest neighbours and itself to their least-squares plane; the `quantile` of
   /// those over the cloud (on clouds above 10,000 points, every (n / 5,000)-th). Neighbourhoods
   /// across an edge scatter too, so a low quantile reads the flat parts: on clean scans it is
-  /// near 0, on noisy ones near the noise's standard deviation.
+  /// near 0, on noisy ones near the noise's standard deviation. A neighbourhood whose distances
+  /// to that plane fall into two layers, with a gap over four times their own spread, counts its
+  /// spread within the layers: the two sides of a wall a few point spacings thin are not noise.
   double noiseLevel(int k, double quantile) const;
 
  private:
