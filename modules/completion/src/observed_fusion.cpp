@@ -402,6 +402,15 @@ class ScannerView {
 
 constexpr int kMinFillSteps = 4;
 
+// How far the primitive's plane passes from `at` when it is (nearly) `plane`: within max_angle of
+// it and max_offset of `at`; infinity otherwise.
+double offsetOnPlane(const PlanarPrimitive& primitive, const Plane& plane, const Eigen::Vector3d& at, double max_angle,
+                     double max_offset) {
+  if (primitive.plane.unorientedAngleTo(plane) > max_angle) return std::numeric_limits<double>::infinity();
+  const double d = std::abs(primitive.plane.signedDistance(at));
+  return d <= max_offset ? d : std::numeric_limits<double>::infinity();
+}
+
 // Adds grid points on the faces of the seen box where no fused point is near and the scan does
 // not show the space empty (SeenFreeSpace; see ObservedFusionOptions::fill_spacing).
 void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observed,
@@ -475,9 +484,8 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& observ
     for (const auto& q : empty) centroid += q;
     centroid /= static_cast<double>(empty.size());
     for (std::size_t f = 0; f < fused.size(); ++f) {
-      if (fused[f].plane.unorientedAngleTo(face.plane) > max_angle) continue;
-      const double d = std::abs(fused[f].plane.signedDistance(centroid));
-      if (d <= max_offset && d < best) {
+      const double d = offsetOnPlane(fused[f], face.plane, centroid, max_angle, max_offset);
+      if (d < best) {
         best = d;
         host = f;
       }
@@ -657,8 +665,8 @@ void capProfileEnds(const SeenBox& seen, const std::vector<PlanarPrimitive>& obs
       const Plane plane = Plane::fromPointAndNormal(seen.axes * local, (side ? 1.0 : -1.0) * seen.axes.col(across));
       const bool closed = std::any_of(fused.begin(), fused.begin() + static_cast<std::ptrdiff_t>(side_planes),
                                       [&](const PlanarPrimitive& primitive) {
-                                        return primitive.plane.unorientedAngleTo(plane) <= max_angle &&
-                                               std::abs(primitive.plane.signedDistance(seen.axes * local)) <= max_offset;
+                                        return std::isfinite(
+                                            offsetOnPlane(primitive, plane, seen.axes * local, max_angle, max_offset));
                                       });
       if (closed) continue;
       std::vector<Eigen::Vector3d> locals;
