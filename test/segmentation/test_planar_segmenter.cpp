@@ -181,6 +181,27 @@ TEST(PlanarSegmenter, DefaultBackendIsGoCoPP) {
   EXPECT_EQ(availablePlanarSegmenters().front(), "gocopp");
 }
 
+TEST(PlanarSegmenter, TheInnerFacesOfAThinChannelWithoutNormalsFaceIntoIt) {
+  // A sheet-metal U channel 0.05 thick, turned off the axes: its rims are too thin to segment,
+  // so no shared edge ties the three inner faces to the outer ones, and all three face the box
+  // centre. Turned away from the centre they would face into the metal; rays through the walls
+  // say otherwise. (The default backend only: RANSAC's segments of this shape carry a weak false
+  // edge across a wall that ties the inner faces to the hull, and region growing finds no plane.)
+  SurfaceMesh channel = test::makePrism(
+      {{0, 0}, {1, 0}, {1, 0.6}, {0.95, 0.6}, {0.95, 0.05}, {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}}, 1.0);
+  test::transformMesh(channel, test::obliqueRotation(), {0.3, -0.2, 0.1});
+  const LabelledSample sample = test::sampleShape(channel, 8000, 21);
+  auto seg = makePlanarSegmenter<pcl::PointXYZ>();
+  seg->setInputCloud(test::withoutNormals(*sample.cloud));
+  PlanarSegmentation result;
+  seg->segment(result);
+  ASSERT_TRUE(seg->prepared().normals_estimated);
+  const test::PlaneRecovery r = test::scoreRecovery(sample, result, 300);
+  EXPECT_EQ(r.visible, 6);  // the outer and inner faces of the web and of the two legs
+  EXPECT_EQ(r.found, r.visible);
+  EXPECT_EQ(r.facing_inwards, 0);
+}
+
 TEST(PlanarSegmenter, ScanMinimumIsAShareOfThePointsAndAtLeastThree) {
   EXPECT_EQ(scanMinPointsPerPlane(2048), 31);    // 30.72, rounded
   EXPECT_EQ(scanMinPointsPerPlane(20000), 300);

@@ -35,6 +35,26 @@ constexpr double kBandSpacingFraction = 0.25;
 // into parallel layers this close.
 constexpr double kCoplanarSpacingFraction = 0.5;
 
+// Ray parity: a ray leaving a closed surface outwards crosses it an even number of times before
+// it leaves the object, one leaving inwards an odd number. Rays per segment (its points evenly
+// spread), ...
+constexpr std::size_t kParityRaysPerSegment = 24;
+// ... a crossing counts where another segment has this many points within this many point
+// spacings of it: inside a face sampled at that spacing there are about 12, along its rim about
+// half as many, at a corner a quarter (with 1.5 spacings and 4 points, most rays across a
+// sheet-metal channel 0.05 thick missed a wall, and its inner faces stayed turned) ...
+constexpr double kCrossingRadiusSpacings = 2.0;
+constexpr std::size_t kMinCrossingPoints = 3;
+// ... planes the ray meets at a grazing angle (cosine below this) are not counted: where it
+// crosses them is too uncertain ...
+constexpr double kMinCrossingCosine = 0.2;
+// ... and a group follows the rays when this share of the rays cast tell (on a partial scan most
+// leave through its holes and say nothing, and a few that tell are too few to trust), and this
+// share of those agree. Shares of 0.1, 0.3 and 0.5 orient the same number of validation
+// segments within one (paco_orientation_check, doc/segmentation.md).
+constexpr double kMinTellingShare = 0.3;
+constexpr double kMinParityShare = 0.7;
+
 // Union-find over segments that also keeps each segment's orientation relative to its root
 // (parity 1: opposite), so that joining two groups by a relation between two of their members
 // fixes every member's orientation relative to the new root.
@@ -118,6 +138,83 @@ struct Relation {
   std::size_t weight = 0;  // points supporting it
 };
 
+// What a ray can cross: the segments, with a bounding sphere each so that most planes are ruled
+// out before a neighbour search. Without the spheres, the milk-carton scan segmented into 428
+// planes took 1.6 s instead of 0.23 s without rays; with them, 0.27 s.
+struct RayScene {
+  const PreparedCloud& prepared;
+  const std::vector<int>& segment_of;
+  const std::vector<Plane>& planes;
+  std::vector<Eigen::Vector3d> centres;
+  std::vector<double> extents;  // largest distance of a segment's point from its centre
+  double spacing = 0.0;
+  double radius = 0.0;  // of the search for a crossed segment's points
+
+  RayScene(const PreparedCloud& cloud, const std::vector<int>& labels, const std::vector<Plane>& segment_planes,
+           const std::vector<std::vector<int>>& members, double point_spacing)
+      : prepared(cloud), segment_of(labels), planes(segment_planes), centres(members.size(), Eigen::Vector3d::Zero()),
+        extents(members.size(), 0.0), spacing(point_spacing), radius(kCrossingRadiusSpacings * point_spacing) {
+    for (std::size_t s = 0; s < members.size(); ++s) {
+      for (const int i : members[s]) centres[s] += position(i);
+      if (!members[s].empty()) centres[s] /= static_cast<double>(members[s].size());
+      for (const int i : members[s]) extents[s] = std::max(extents[s], (position(i) - centres[s]).norm());
+    }
+  }
+  Eigen::Vector3d position(int i) const { return (*prepared.points)[static_cast<std::size_t>(i)].getVector3fMap().cast<double>(); }
+
+  // How many times a ray from `origin` along `direction` crosses the surface of segments other
+  // than `own`. A segment is crossed where kMinCrossingPoints of its points lie within `radius`
+  // of the ray's hit on its plane. Hits closer than a point spacing to the origin or to each
+  // other are layers of one surface, not two (a face split into parallel segments by noise or
+  // by two passes of a scanner that do not quite agree); a wall that thin cannot be resolved at
+  // that spacing anyway.
+  std::size_t crossings(std::size_t own, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const {
+    std::vector<double> hits;
+    pcl::Indices found;
+    std::vector<float> sq_distances;
+    for (std::size_t t = 0; t < planes.size(); ++t) {
+      if (t == own) continue;
+      const double along = planes[t].normal.dot(direction);
+      if (std::abs(along) < kMinCrossingCosine) continue;
+      const double distance = -planes[t].signedDistance(origin) / along;
+      if (distance < spacing) continue;
+      const Eigen::Vector3d at = origin + distance * direction;
+      if ((at - centres[t]).norm() > extents[t] + radius) continue;
+      pcl::PointNormal query;
+      query.getVector3fMap() = at.cast<float>();
+      if (prepared.tree->radiusSearch(query, radius, found, sq_distances) < static_cast<int>(kMinCrossingPoints)) continue;
+      const auto on_t = std::count_if(found.begin(), found.end(), [&](const auto j) {
+        return segment_of[static_cast<std::size_t>(j)] == static_cast<int>(t);
+      });
+      if (static_cast<std::size_t>(on_t) >= kMinCrossingPoints) hits.push_back(distance);
+    }
+    std::sort(hits.begin(), hits.end());
+    std::size_t count = 0;
+    for (std::size_t h = 0; h < hits.size(); ++h)
+      if (h == 0 || hits[h] - hits[h - 1] > spacing) ++count;
+    return count;
+  }
+
+  // +1 for each ray of segment `s` (`members`) that says `normal` faces out (an even number of
+  // crossings ahead of it and an odd number behind), -1 for each that says it faces in; rays that
+  // cross both ways evenly (they leave through a hole in the scan) or both oddly say nothing.
+  long vote(std::size_t s, const std::vector<int>& members, const Eigen::Vector3d& normal, std::size_t& rays_cast,
+            std::size_t& rays_that_tell) const {
+    long total = 0;
+    const std::size_t step = std::max<std::size_t>(1, members.size() / kParityRaysPerSegment);
+    for (std::size_t k = 0; k < members.size(); k += step) {
+      const Eigen::Vector3d origin = position(members[k]);
+      ++rays_cast;
+      const bool ahead_odd = crossings(s, origin, normal) % 2 == 1;
+      const bool behind_odd = crossings(s, origin, -normal) % 2 == 1;
+      if (ahead_odd == behind_odd) continue;
+      ++rays_that_tell;
+      total += behind_odd ? 1 : -1;
+    }
+    return total;
+  }
+};
+
 }  // namespace
 
 void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<std::vector<int>>& members,
@@ -191,8 +288,13 @@ void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<st
   ParityUnionFind groups(segments);
   for (const auto& r : relations) groups.join(r.a, r.b, r.flip);
 
-  // Each group's orientation as a whole: given normals vote first, else away from the centre.
-  std::vector<long> given_votes(segments, 0), outward_votes(segments, 0);
+  // Each group's orientation as a whole: given normals vote first, then rays (when enough of them
+  // agree), else away from the centre. Away from the centre is right for the outer hull but wrong
+  // for every face of a cavity that no edge relation ties to the hull: the inner faces of a
+  // sheet-metal channel, whose rims are too thin to segment, face the centre. Rays tell them.
+  std::vector<long> given_votes(segments, 0), outward_votes(segments, 0), parity_votes(segments, 0);
+  std::vector<std::size_t> rays_cast(segments, 0), rays_that_tell(segments, 0);
+  const RayScene rays(prepared, segment_of, planes, members, spacing);
   std::vector<int> parity(segments, 0);
   std::vector<std::size_t> root(segments, 0);
   std::vector<bool> mostly_given(segments, false);
@@ -212,10 +314,19 @@ void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<st
       given_votes[root[s]] += agreement > 0.0 ? 1 : (agreement < 0.0 ? -1 : 0);
     }
     mostly_given[s] = 2 * given > members[s].size();
+    if (!mostly_given[s]) parity_votes[root[s]] += rays.vote(s, members[s], n, rays_cast[root[s]], rays_that_tell[root[s]]);
   }
+  const auto rays_decide = [&](std::size_t group) {
+    const auto telling = static_cast<double>(rays_that_tell[group]);
+    return telling > 0.0 && telling >= kMinTellingShare * static_cast<double>(rays_cast[group]) &&
+           static_cast<double>(std::abs(parity_votes[group])) >= kMinParityShare * telling;
+  };
   for (std::size_t s = 0; s < segments; ++s) {
     if (mostly_given[s]) continue;
-    const long vote = given_votes[root[s]] != 0 ? given_votes[root[s]] : outward_votes[root[s]];
+    const std::size_t group = root[s];
+    const long vote = given_votes[group] != 0 ? given_votes[group]
+                      : rays_decide(group)    ? parity_votes[group]
+                                              : outward_votes[group];
     const bool turn_group = vote < 0;
     if (static_cast<bool>(parity[s]) != turn_group) planes[s] = planes[s].flipped();
   }

@@ -105,8 +105,12 @@ PlanarSegmentation finalizeSegmentation(const PreparedCloud& prepared, const std
 ///   skipped);
 /// - the best-supported relations (most points near the edge that tell) join segments into
 ///   groups; one that would close a loop is left out;
-/// - each group as a whole then faces like the given normals it holds, or else away from the box
-///   centre by a majority of its points, which the outer hull of a part dominates.
+/// - each group as a whole then faces like the given normals it holds; or else as rays from its
+///   points say, when enough of them tell and agree (a ray leaving a closed surface outwards
+///   crosses it an even number of times, inwards an odd number; on a partial scan most rays leave
+///   through its holes and say nothing); or else away from the box centre by a majority of its
+///   points, which the outer hull of a part dominates. The rays orient the inner faces of a
+///   sheet-metal channel, which no shared edge ties to the hull and which face the centre.
 /// Segments whose points mostly had given normals keep their orientation. `members` holds the
 /// working points of each segment, `planes` their planes, oriented in place.
 void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<std::vector<int>>& members,
