@@ -37,8 +37,10 @@ constexpr double kCoplanarSpacingFraction = 0.5;
 
 // Ray parity: a ray leaving a closed surface outwards crosses it an even number of times before
 // it leaves the object, one leaving inwards an odd number. Rays per segment (its points evenly
-// spread), ...
+// spread), fewer when there are so many segments that the plane tests (each ray tests every
+// plane) would exceed a budget of about a second ...
 constexpr std::size_t kParityRaysPerSegment = 24;
+constexpr double kMaxPlaneTests = 1e8;
 // ... a crossing counts where another segment has this many points within this many point
 // spacings of it: inside a face sampled at that spacing there are about 12, along its rim about
 // half as many, at a corner a quarter (with 1.5 spacings and 4 points, most rays across a
@@ -149,11 +151,16 @@ struct RayScene {
   std::vector<double> extents;  // largest distance of a segment's point from its centre
   double spacing = 0.0;
   double radius = 0.0;  // of the search for a crossed segment's points
+  std::size_t rays_per_segment = kParityRaysPerSegment;
 
   RayScene(const PreparedCloud& cloud, const std::vector<int>& labels, const std::vector<Plane>& segment_planes,
            const std::vector<std::vector<int>>& members, double point_spacing)
       : prepared(cloud), segment_of(labels), planes(segment_planes), centres(members.size(), Eigen::Vector3d::Zero()),
         extents(members.size(), 0.0), spacing(point_spacing), radius(kCrossingRadiusSpacings * point_spacing) {
+    const double segments = static_cast<double>(members.size());
+    const double affordable = kMaxPlaneTests / std::max(1.0, 2.0 * segments * segments);
+    if (affordable < static_cast<double>(kParityRaysPerSegment))
+      rays_per_segment = std::max<std::size_t>(1, static_cast<std::size_t>(affordable));
     for (std::size_t s = 0; s < members.size(); ++s) {
       for (const int i : members[s]) centres[s] += position(i);
       if (!members[s].empty()) centres[s] /= static_cast<double>(members[s].size());
@@ -201,7 +208,7 @@ struct RayScene {
   long vote(std::size_t s, const std::vector<int>& members, const Eigen::Vector3d& normal, std::size_t& rays_cast,
             std::size_t& rays_that_tell) const {
     long total = 0;
-    const std::size_t step = std::max<std::size_t>(1, members.size() / kParityRaysPerSegment);
+    const std::size_t step = std::max<std::size_t>(1, members.size() / rays_per_segment);
     for (std::size_t k = 0; k < members.size(); k += step) {
       const Eigen::Vector3d origin = position(members[k]);
       ++rays_cast;
