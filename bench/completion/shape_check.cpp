@@ -63,6 +63,8 @@ std::vector<Shape> shapes() {
                              {0, 0.6}, {0, 0.55}, {0.275, 0.55}, {0.275, 0.05}, {0, 0.05}},
                             1.0),
                   everywhere});
+  list.push_back({"sheet-metal square tube 0.6 x 0.6, 0.05 thick", paco::test::makeSquareTube(0.6, 0.05, 1.0),
+                  everywhere});
   return list;
 }
 
