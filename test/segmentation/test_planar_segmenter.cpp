@@ -185,8 +185,9 @@ TEST(PlanarSegmenter, TheInnerFacesOfAThinChannelWithoutNormalsFaceIntoIt) {
   // A sheet-metal U channel 0.05 thick, turned off the axes: its rims are too thin to segment,
   // so no shared edge ties the three inner faces to the outer ones, and all three face the box
   // centre. Turned away from the centre they would face into the metal; rays through the walls
-  // say otherwise. (The default backend only: RANSAC's segments of this shape carry a weak false
-  // edge across a wall that ties the inner faces to the hull, and region growing finds no plane.)
+  // say otherwise. (The default backend only: the RANSAC backends' segments of this shape carry
+  // false edges across a wall that tie the inner faces to the hull with the wrong parity, and
+  // region growing finds no plane.)
   SurfaceMesh channel = test::makePrism(
       {{0, 0}, {1, 0}, {1, 0.6}, {0.95, 0.6}, {0.95, 0.05}, {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}}, 1.0);
   test::transformMesh(channel, test::obliqueRotation(), {0.3, -0.2, 0.1});

@@ -33,16 +33,17 @@ SurfaceMesh makeLBracket(double a, double b, double h) {
 SurfaceMesh makeSquareTube(double outer, double wall, double length) {
   const double a = outer, t = wall;
   // Corners counter-clockwise from above: outer 0-3, inner 4-7, at z = 0; then the same at length.
-  const std::vector<Eigen::Vector2d> corners = {{0, 0}, {a, 0}, {a, a}, {0, a}, {t, t}, {a - t, t}, {a - t, a - t}, {t, a - t}};
+  const std::vector<Eigen::Vector2d> corners = {{0, 0}, {a, 0},     {a, a},         {0, a},
+                                                {t, t}, {a - t, t}, {a - t, a - t}, {t, a - t}};
   SurfaceMesh m;
   for (const double z : {0.0, length})
     for (const auto& c : corners) m.vertices.emplace_back(c.x(), c.y(), z);
   for (std::uint32_t i = 0; i < 4; ++i) {
     const std::uint32_t j = (i + 1) % 4;
-    m.faces.push_back({i, j, 8 + j, 8 + i});                  // outer wall, facing out
-    m.faces.push_back({4 + j, 4 + i, 12 + i, 12 + j});        // inner wall, facing the hole
-    m.faces.push_back({4 + i, 4 + j, j, i});                  // bottom frame, facing -z
-    m.faces.push_back({8 + i, 8 + j, 12 + j, 12 + i});        // top frame, facing +z
+    m.faces.push_back({i, j, 8 + j, 8 + i});            // outer wall, facing out
+    m.faces.push_back({4 + j, 4 + i, 12 + i, 12 + j});  // inner wall, facing the hole
+    m.faces.push_back({4 + i, 4 + j, j, i});            // bottom frame, facing -z
+    m.faces.push_back({8 + i, 8 + j, 12 + j, 12 + i});  // top frame, facing +z
   }
   return m;
 }
