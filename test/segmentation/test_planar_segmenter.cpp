@@ -111,6 +111,29 @@ TEST_P(EveryBackend, PlanesWithEstimatedNormalsFaceOutwardsAlsoInAConcaveCorner)
   EXPECT_EQ(r.facing_inwards, 0);
 }
 
+TEST_P(EveryBackend, TheInnerFacesOfAThinChannelWithoutNormalsFaceIntoIt) {
+  // A sheet-metal U channel 0.05 thick, turned off the axes: its rims are too thin to segment,
+  // so no shared edge ties the three inner faces to the outer ones, and all three face the box
+  // centre. Turned away from the centre they would face into the metal; rays through the walls
+  // say otherwise. The RANSAC backends' segments also carry a false edge across a wall, which
+  // ties the inner faces to the hull with the wrong parity until the rays split the group there.
+  if (GetParam() == "region-growing")
+    GTEST_SKIP() << "PCL region growing finds no plane on walls this thin (every neighbourhood holds both sides)";
+  SurfaceMesh channel = test::makePrism(
+      {{0, 0}, {1, 0}, {1, 0.6}, {0.95, 0.6}, {0.95, 0.05}, {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}}, 1.0);
+  test::transformMesh(channel, test::obliqueRotation(), {0.3, -0.2, 0.1});
+  const LabelledSample sample = test::sampleShape(channel, 8000, 21);
+  auto seg = makePlanarSegmenter<pcl::PointXYZ>(GetParam());
+  seg->setInputCloud(test::withoutNormals(*sample.cloud));
+  PlanarSegmentation result;
+  seg->segment(result);
+  ASSERT_TRUE(seg->prepared().normals_estimated);
+  const test::PlaneRecovery r = test::scoreRecovery(sample, result, 300);
+  EXPECT_EQ(r.visible, 6);  // the outer and inner faces of the web and of the two legs
+  EXPECT_EQ(r.found, r.visible);
+  EXPECT_EQ(r.facing_inwards, 0);
+}
+
 TEST_P(EveryBackend, NoisyBoxWithoutNormalsTakesNormalsFromMoreNeighbours) {
   // Noise of 1 % of the diagonal on every coordinate, about 40 % of the point spacing: from
   // 20 neighbours the estimated normals tilt so much that few points fit their face's plane.
@@ -179,28 +202,6 @@ INSTANTIATE_TEST_SUITE_P(Backends, EveryBackend, ::testing::ValuesIn(availablePl
 TEST(PlanarSegmenter, DefaultBackendIsGoCoPP) {
   EXPECT_EQ(makePlanarSegmenter<pcl::PointXYZ>()->name(), "gocopp");
   EXPECT_EQ(availablePlanarSegmenters().front(), "gocopp");
-}
-
-TEST(PlanarSegmenter, TheInnerFacesOfAThinChannelWithoutNormalsFaceIntoIt) {
-  // A sheet-metal U channel 0.05 thick, turned off the axes: its rims are too thin to segment,
-  // so no shared edge ties the three inner faces to the outer ones, and all three face the box
-  // centre. Turned away from the centre they would face into the metal; rays through the walls
-  // say otherwise. (The default backend only: the RANSAC backends' segments of this shape carry
-  // false edges across a wall that tie the inner faces to the hull with the wrong parity, and
-  // region growing finds no plane.)
-  SurfaceMesh channel = test::makePrism(
-      {{0, 0}, {1, 0}, {1, 0.6}, {0.95, 0.6}, {0.95, 0.05}, {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}}, 1.0);
-  test::transformMesh(channel, test::obliqueRotation(), {0.3, -0.2, 0.1});
-  const LabelledSample sample = test::sampleShape(channel, 8000, 21);
-  auto seg = makePlanarSegmenter<pcl::PointXYZ>();
-  seg->setInputCloud(test::withoutNormals(*sample.cloud));
-  PlanarSegmentation result;
-  seg->segment(result);
-  ASSERT_TRUE(seg->prepared().normals_estimated);
-  const test::PlaneRecovery r = test::scoreRecovery(sample, result, 300);
-  EXPECT_EQ(r.visible, 6);  // the outer and inner faces of the web and of the two legs
-  EXPECT_EQ(r.found, r.visible);
-  EXPECT_EQ(r.facing_inwards, 0);
 }
 
 TEST(PlanarSegmenter, ScanMinimumIsAShareOfThePointsAndAtLeastThree) {

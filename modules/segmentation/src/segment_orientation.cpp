@@ -56,6 +56,10 @@ constexpr double kMinCrossingCosine = 0.2;
 // segments within one (paco_orientation_check, doc/segmentation.md).
 constexpr double kMinTellingShare = 0.3;
 constexpr double kMinParityShare = 0.7;
+// A group whose rays disagree is split in two only when each part has at least this many rays
+// that tell, two segments' worth: a part of one small segment, whose far side a partial scan
+// often lacks, would follow its own few rays.
+constexpr std::size_t kMinSplitPartRays = 2 * kParityRaysPerSegment;
 
 // Union-find over segments that also keeps each segment's orientation relative to its root
 // (parity 1: opposite), so that joining two groups by a relation between two of their members
@@ -138,6 +142,25 @@ struct Relation {
   std::size_t a = 0, b = 0;
   int flip = 0;            // 1: one of the two must turn for them to agree
   std::size_t weight = 0;  // points supporting it
+};
+
+// What the rays of one segment, or of a group, say about its normal.
+struct RayVerdict {
+  long vote = 0;            // +1 per ray saying the normal faces out, -1 per ray saying in
+  std::size_t cast = 0;     // rays cast
+  std::size_t telling = 0;  // rays that said either
+
+  bool tellsEnough() const {
+    return telling > 0 && static_cast<double>(telling) >= kMinTellingShare * static_cast<double>(cast);
+  }
+  bool agrees() const { return static_cast<double>(std::abs(vote)) >= kMinParityShare * static_cast<double>(telling); }
+  bool decisive() const { return tellsEnough() && agrees(); }
+  // Adds another segment's verdict, whose normal is turned against this one's when `turned`.
+  void add(const RayVerdict& other, bool turned) {
+    vote += turned ? -other.vote : other.vote;
+    cast += other.cast;
+    telling += other.telling;
+  }
 };
 
 // What a ray can cross: the segments, with a bounding sphere each so that most planes are ruled
@@ -292,48 +315,106 @@ void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<st
   // on a weak edge cannot overrule the strong ones (a maximum spanning forest).
   std::stable_sort(relations.begin(), relations.end(),
                    [](const Relation& x, const Relation& y) { return x.weight > y.weight; });
-  ParityUnionFind groups(segments);
-  for (const auto& r : relations) groups.join(r.a, r.b, r.flip);
+  // Which segments mostly had given normals: they keep their orientation, and vote for their
+  // group's.
+  std::vector<bool> mostly_given(segments, false);
+  for (std::size_t s = 0; s < segments; ++s) {
+    const auto given = std::count_if(members[s].begin(), members[s].end(), [&](const int i) {
+      return !prepared.estimated_normal[static_cast<std::size_t>(i)];
+    });
+    mostly_given[s] = 2 * static_cast<std::size_t>(given) > members[s].size();
+  }
+  // What each segment's rays say, in its own plane's orientation.
+  const RayScene scene(prepared, segment_of, planes, members, spacing);
+  std::vector<RayVerdict> rays(segments);
+  for (std::size_t s = 0; s < segments; ++s)
+    if (!mostly_given[s]) rays[s].vote = scene.vote(s, members[s], planes[s].normal, rays[s].cast, rays[s].telling);
+
+  // The spanning forest over the relations not dropped; `joined` marks the relations it used.
+  std::vector<bool> dropped(relations.size(), false);
+  const auto forest = [&](std::vector<bool>& joined) {
+    ParityUnionFind groups(segments);
+    joined.assign(relations.size(), false);
+    for (std::size_t k = 0; k < relations.size(); ++k)
+      if (!dropped[k]) joined[k] = groups.join(relations[k].a, relations[k].b, relations[k].flip);
+    return groups;
+  };
+  // The rays of each group (indexed by its root), in the root's orientation.
+  const auto group_rays = [&](ParityUnionFind& groups) {
+    std::vector<RayVerdict> verdicts(segments);
+    for (std::size_t s = 0; s < segments; ++s) {
+      const auto [root, parity] = groups.find(s);
+      verdicts[root].add(rays[s], parity != 0);
+    }
+    return verdicts;
+  };
+  std::vector<bool> joined;
+  ParityUnionFind groups = forest(joined);
+
+  // A group whose rays tell but disagree may hold a false relation: points seen through a thin
+  // wall make an edge between its two sides (3 points each side in PCL RANSAC's segments of a U
+  // channel, 27 in CGAL's). The relation whose removal leaves two parts whose rays each agree,
+  // with kMinSplitPartRays that tell in each, is dropped (the one with the most rays behind its
+  // parts, if several). One split per group.
+  {
+    const std::vector<RayVerdict> verdicts = group_rays(groups);
+    bool any = false;
+    for (std::size_t g = 0; g < segments; ++g) {
+      if (!verdicts[g].tellsEnough() || verdicts[g].agrees() || groups.find(g).first != g) continue;
+      std::size_t best = relations.size();
+      long best_votes = 0;
+      for (std::size_t k = 0; k < relations.size(); ++k) {
+        if (!joined[k] || groups.find(relations[k].a).first != g) continue;
+        dropped[k] = true;
+        std::vector<bool> split_joined;
+        ParityUnionFind split = forest(split_joined);
+        const std::vector<RayVerdict> parts = group_rays(split);
+        const RayVerdict& a = parts[split.find(relations[k].a).first];
+        const RayVerdict& b = parts[split.find(relations[k].b).first];
+        const long votes = std::abs(a.vote) + std::abs(b.vote);
+        const bool substantial = a.telling >= kMinSplitPartRays && b.telling >= kMinSplitPartRays;
+        if (substantial && a.decisive() && b.decisive() && votes > best_votes) {
+          best = k;
+          best_votes = votes;
+        }
+        dropped[k] = false;
+      }
+      if (best < relations.size()) {
+        dropped[best] = true;
+        any = true;
+      }
+    }
+    if (any) groups = forest(joined);
+  }
 
   // Each group's orientation as a whole: given normals vote first, then rays (when enough of them
-  // agree), else away from the centre. Away from the centre is right for the outer hull but wrong
-  // for every face of a cavity that no edge relation ties to the hull: the inner faces of a
-  // sheet-metal channel, whose rims are too thin to segment, face the centre. Rays tell them.
-  std::vector<long> given_votes(segments, 0), outward_votes(segments, 0), parity_votes(segments, 0);
-  std::vector<std::size_t> rays_cast(segments, 0), rays_that_tell(segments, 0);
-  const RayScene rays(prepared, segment_of, planes, members, spacing);
+  // tell and agree), else away from the centre. Away from the centre is right for the outer hull
+  // but wrong for every face of a cavity that no edge relation ties to the hull: the inner faces
+  // of a sheet-metal channel, whose rims are too thin to segment, face the centre. Rays tell them.
+  const std::vector<RayVerdict> final_rays = group_rays(groups);
+  std::vector<long> given_votes(segments, 0), outward_votes(segments, 0);
   std::vector<int> parity(segments, 0);
   std::vector<std::size_t> root(segments, 0);
-  std::vector<bool> mostly_given(segments, false);
   for (std::size_t s = 0; s < segments; ++s) {
     std::tie(root[s], parity[s]) = groups.find(s);
     const double sign = parity[s] ? -1.0 : 1.0;  // this segment's normal in its root's orientation
     const Eigen::Vector3d n = sign * planes[s].normal;
-    std::size_t given = 0;
     for (const int i : members[s]) {
       const auto& p = points[static_cast<std::size_t>(i)];
       const Eigen::Vector3d position = p.getVector3fMap().cast<double>();
       const double outward = n.dot(position);  // the box centre is the origin of the working frame
       outward_votes[root[s]] += outward > 0.0 ? 1 : (outward < 0.0 ? -1 : 0);
       if (prepared.estimated_normal[static_cast<std::size_t>(i)]) continue;
-      ++given;
       const double agreement = n.dot(p.getNormalVector3fMap().cast<double>());
       given_votes[root[s]] += agreement > 0.0 ? 1 : (agreement < 0.0 ? -1 : 0);
     }
-    mostly_given[s] = 2 * given > members[s].size();
-    if (!mostly_given[s]) parity_votes[root[s]] += rays.vote(s, members[s], n, rays_cast[root[s]], rays_that_tell[root[s]]);
   }
-  const auto rays_decide = [&](std::size_t group) {
-    const auto telling = static_cast<double>(rays_that_tell[group]);
-    return telling > 0.0 && telling >= kMinTellingShare * static_cast<double>(rays_cast[group]) &&
-           static_cast<double>(std::abs(parity_votes[group])) >= kMinParityShare * telling;
-  };
   for (std::size_t s = 0; s < segments; ++s) {
     if (mostly_given[s]) continue;
     const std::size_t group = root[s];
-    const long vote = given_votes[group] != 0 ? given_votes[group]
-                      : rays_decide(group)    ? parity_votes[group]
-                                              : outward_votes[group];
+    const long vote = given_votes[group] != 0      ? given_votes[group]
+                      : final_rays[group].decisive() ? final_rays[group].vote
+                                                     : outward_votes[group];
     const bool turn_group = vote < 0;
     if (static_cast<bool>(parity[s]) != turn_group) planes[s] = planes[s].flipped();
   }
