@@ -54,10 +54,7 @@ std::vector<Shape> shapes() {
                   [](const Eigen::Vector3d& p, const Eigen::Vector3d&) { return p.z() > 1e-6; }});
   list.push_back({"the same building, its walls only", building(),
                   [](const Eigen::Vector3d&, const Eigen::Vector3d& n) { return std::abs(n.z()) < 0.5; }});
-  list.push_back({"sheet-metal U channel, 0.05 thick", makePrism({{0, 0}, {1, 0}, {1, 0.6}, {0.95, 0.6}, {0.95, 0.05},
-                                                                  {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}},
-                                                                 1.0),
-                  everywhere});
+  list.push_back({"sheet-metal U channel, 0.05 thick", paco::test::makeUChannel(1.0, 0.6, 0.05, 1.0), everywhere});
   list.push_back({"I-beam, flanges and web 0.05 thick",
                   makePrism({{0, 0}, {0.6, 0}, {0.6, 0.05}, {0.325, 0.05}, {0.325, 0.55}, {0.6, 0.55}, {0.6, 0.6},
                              {0, 0.6}, {0, 0.55}, {0.275, 0.55}, {0.275, 0.05}, {0, 0.05}},

@@ -284,12 +284,11 @@ TEST(PacoReconstruct, AThinPlateScannedOnItsTwoSidesClosesAtItsThickness) {
 TEST(PacoReconstruct, ThinSheetMetalProfilesCloseAtTheirEnds) {
   TempDir dir;
   const double t = 0.05;
-  const std::vector<std::pair<std::string, std::vector<Eigen::Vector2d>>> profiles = {
-      {"bracket", {{0, 0}, {1, 0}, {1, t}, {t, t}, {t, 0.8}, {0, 0.8}}},
-      {"channel", {{0, 0}, {1, 0}, {1, 0.6}, {1 - t, 0.6}, {1 - t, t}, {t, t}, {t, 0.6}, {0, 0.6}}},
+  const std::vector<std::pair<std::string, paco::SurfaceMesh>> profiles = {
+      {"bracket", paco::test::makePrism({{0, 0}, {1, 0}, {1, t}, {t, t}, {t, 0.8}, {0, 0.8}}, 1.0)},
+      {"channel", paco::test::makeUChannel(1.0, 0.6, t, 1.0)},
   };
-  for (const auto& [name, outline] : profiles) {
-    const paco::SurfaceMesh profile = paco::test::makePrism(outline, 1.0);
+  for (const auto& [name, profile] : profiles) {
     const paco::SurfaceSample surface = paco::sampleSurface(profile, 8000, 7);
     paco::io::LabelledCloud scan;
     for (const Eigen::Vector3d& x : surface.points) {

@@ -227,7 +227,8 @@ TEST(TestShapes, AreClosedOrientedSolidsWithKnownVolumes) {
                         {"L", paco::test::makeLBracket(1.0, 0.4, 0.6), 0.6 * (1 - 0.36)},
                         {"chamfer", paco::test::makeChamferedCube(0.3), 1 - 0.045},
                         {"boss", paco::test::makeBossOnSlab(), 5.0},
-                        {"tube", paco::test::makeSquareTube(0.6, 0.05, 1.0), 0.36 - 0.25}};
+                        {"tube", paco::test::makeSquareTube(0.6, 0.05, 1.0), 0.36 - 0.25},
+                        {"channel", paco::test::makeUChannel(1.0, 0.6, 0.05, 1.0), 0.6 - 0.9 * 0.55}};
   for (const auto& c : cases) {
     const auto t = paco::analyseTopology(c.mesh);
     EXPECT_TRUE(t.isClosedManifold()) << c.name << ": " << t.describe();

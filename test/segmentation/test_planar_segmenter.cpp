@@ -119,8 +119,7 @@ TEST_P(EveryBackend, TheInnerFacesOfAThinChannelWithoutNormalsFaceIntoIt) {
   // ties the inner faces to the hull with the wrong parity until the rays split the group there.
   if (GetParam() == "region-growing")
     GTEST_SKIP() << "PCL region growing finds no plane on walls this thin (every neighbourhood holds both sides)";
-  SurfaceMesh channel = test::makePrism(
-      {{0, 0}, {1, 0}, {1, 0.6}, {0.95, 0.6}, {0.95, 0.05}, {0.05, 0.05}, {0.05, 0.6}, {0, 0.6}}, 1.0);
+  SurfaceMesh channel = test::makeUChannel(1.0, 0.6, 0.05, 1.0);
   test::transformMesh(channel, test::obliqueRotation(), {0.3, -0.2, 0.1});
   const LabelledSample sample = test::sampleShape(channel, 8000, 21);
   auto seg = makePlanarSegmenter<pcl::PointXYZ>(GetParam());

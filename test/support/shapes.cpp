@@ -30,6 +30,11 @@ SurfaceMesh makeLBracket(double a, double b, double h) {
   return makePrism({{0, 0}, {a, 0}, {a, b}, {b, b}, {b, a}, {0, a}}, h);
 }
 
+SurfaceMesh makeUChannel(double width, double height, double wall, double length) {
+  const double w = width, h = height, t = wall;
+  return makePrism({{0, 0}, {w, 0}, {w, h}, {w - t, h}, {w - t, t}, {t, t}, {t, h}, {0, h}}, length);
+}
+
 SurfaceMesh makeSquareTube(double outer, double wall, double length) {
   const double a = outer, t = wall;
   // Corners counter-clockwise from above: outer 0-3, inner 4-7, at z = 0; then the same at length.

@@ -21,6 +21,9 @@ SurfaceMesh makeChamferedCube(double c = 0.3);
 /// Union of a 2 x 2 x 1 slab and a 1 x 1 x 1 boss centred on its top: 11 planes (the slab top
 /// is one ring face, triangulated), volume 5.
 SurfaceMesh makeBossOnSlab();
+/// A U channel along z: a web `width` wide along x and two legs `height` tall along y, all `wall`
+/// thick, from z = 0 to z = length (10 planes).
+SurfaceMesh makeUChannel(double width, double height, double wall, double length);
 /// A square tube along z: an outer x outer square with a (outer - 2 wall)-wide square hole, from
 /// z = 0 to z = length. 4 outer and 4 inner walls, each end a frame of 4 quads (8 planes); volume
 /// length * (outer^2 - (outer - 2 wall)^2).
