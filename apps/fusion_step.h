@@ -7,6 +7,7 @@
 #include <paco/common/error.h>
 #include <paco/common/normalization.h>
 #include <paco/common/point_types.h>
+#include <paco/completion/hidden_extent.h>
 #include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/completion/turn_ensemble.h>
@@ -16,6 +17,7 @@
 #include <boost/algorithm/string.hpp>
 #include <boost/program_options.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -132,12 +134,14 @@ inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
 /// (scanner_direction / scanner_position / scanner_cell).
 struct ScanKnowledge {
   std::vector<Eigen::Vector3d> known_extent;
+  /// --extent-head: a hidden-extent head whose guess becomes `known_extent` (guessHiddenExtent).
+  std::string extent_head;
   Eigen::Vector3d scanner_direction = Eigen::Vector3d::Zero();
   std::optional<Eigen::Vector3d> scanner_position;
   double scanner_cell = ObservedFusionOptions().scanner_cell;
 
   bool empty() const {
-    return known_extent.empty() && scanner_direction.squaredNorm() == 0.0 && !scanner_position;
+    return known_extent.empty() && extent_head.empty() && scanner_direction.squaredNorm() == 0.0 && !scanner_position;
   }
 
   /// The same knowledge in the working frame of a scan read with io::LabelledCloud::coordinate_offset
@@ -152,7 +156,7 @@ struct ScanKnowledge {
 
 /// --known-extent, --seen-from, --seen-from-point and --scanner-cell of the tools that fuse.
 struct ScanKnowledgeFlags {
-  std::string known_extent, seen_from, seen_from_point;
+  std::string known_extent, extent_head, seen_from, seen_from_point;
   double scanner_cell = ObservedFusionOptions().scanner_cell;
 
   void addTo(boost::program_options::options_description& options) {
@@ -162,6 +166,10 @@ struct ScanKnowledgeFlags {
          "X0,Y0,Z0,X1,Y1,Z1 (a box), or a cloud file of points (e.g. a footprint's corners at ground and roof "
          "height): where the object is known to reach, in the input's units and frame; the hidden side is closed "
          "there instead of at the scan's box (with fusion)")
+        ("extent-head", po::value(&extent_head),
+         "a hidden-extent head trained for the model (paco_train --extent-head-for), e.g. models/extent_mfcad.pt for "
+         "parts cut from a cube: the hidden side is closed where it guesses the object ends (with fusion; "
+         "doc/completion.md)")
         ("seen-from", po::value(&seen_from),
          "X,Y,Z: the direction towards a distant scanner (e.g. 0,0,1 for airborne LiDAR with Z up); completed "
          "points it would have seen (off the scan's silhouette, or in front of what it saw) are dropped (with fusion)")
@@ -177,6 +185,9 @@ struct ScanKnowledgeFlags {
   ScanKnowledge parse() const {
     ScanKnowledge knowledge;
     knowledge.known_extent = parseKnownExtent(known_extent);
+    if (!extent_head.empty() && !known_extent.empty())
+      throw UsageError("--extent-head guesses the extent that --known-extent gives: choose one");
+    knowledge.extent_head = extent_head;
     if (!seen_from.empty() && !seen_from_point.empty())
       throw UsageError("give --seen-from (a direction) or --seen-from-point (a position), not both");
     if (!seen_from.empty()) {
@@ -226,11 +237,33 @@ struct CompletionFlags {
     fusion.validate();
     const ScanKnowledge parsed = knowledge.parse();
     if (!parsed.empty() && no_fusion)
-      throw UsageError("--known-extent, --seen-from and --seen-from-point work through the fusion step: drop "
-                       "--no-fusion");
+      throw UsageError("--known-extent, --extent-head, --seen-from and --seen-from-point work through the fusion "
+                       "step: drop --no-fusion");
     return parsed;
   }
 };
+
+/// The head of --extent-head, checked against the model before any slow work; null without one.
+inline HiddenExtentModel::ConstPtr loadExtentHead(const ScanKnowledge& knowledge, const CompletionModel& model) {
+  if (knowledge.extent_head.empty()) return nullptr;
+  auto head = HiddenExtentModel::load(knowledge.extent_head);
+  head->checkMatches(model);
+  return head;
+}
+
+/// --extent-head: the head's guess of how far the object reaches beyond the scan becomes the
+/// known extent of the box fill. Timed as "extent".
+inline void guessHiddenExtent(const CompletionModel::ConstPtr& model, const HiddenExtentModel& head,
+                              const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
+                              const PlanarSegmentation& segmentation, ScanKnowledge& knowledge, StageTimer& timer) {
+  timer.start("extent");
+  const HiddenExtent extent = estimateHiddenExtent(model, head, cloud, segmentation);
+  timer.stop();
+  knowledge.known_extent = extent.corners();
+  std::printf("hidden extent (%s): the object reaches up to %.4g beyond the scan's box (%.1f %% of its diagonal)\n",
+              head.path().c_str(), extent.largestInUserUnits(),
+              100.0 * *std::max_element(extent.beyond.begin(), extent.beyond.end()));
+}
 
 /// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`; the box
 /// fill reaches the known extent, and the scanner's view bounds the completion, when given.
@@ -266,7 +299,10 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
   options.scanner_cell = knowledge.scanner_cell;
   primitives = fuseWithObserved(std::move(primitives), makePrimitives(cloud, segmentation), options, &report);
   timer.stop();
-  std::printf("fuse with the seen faces%s: %s\n", knowledge.known_extent.empty() ? "" : " (box fill to the known extent)",
+  std::printf("fuse with the seen faces%s: %s\n",
+              knowledge.known_extent.empty()   ? ""
+              : knowledge.extent_head.empty() ? " (box fill to the known extent)"
+                                              : " (box fill to the guessed extent)",
               describe(report).c_str());
 }
 

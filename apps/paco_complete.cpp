@@ -88,7 +88,8 @@ int run(int argc, char** argv) {
   paco::app::checkOutputPath(o.output, "-o", {".vg", ".bvg"});
   if (!o.pcd.empty()) paco::app::checkOutputPath(o.pcd, "--pcd", {".pcd"});
   paco::app::checkOutputsAreNotInputs(
-      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.completion.knowledge.known_extent}},
+      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.completion.knowledge.known_extent},
+       {"--extent-head", o.completion.knowledge.extent_head}},
       {{"-o", o.output}, {"--pcd", o.pcd}});
   const paco::app::ScanKnowledge knowledge = o.completion.validate();
   o.scan.validate();
@@ -116,6 +117,7 @@ int run(int argc, char** argv) {
   if (o.threads > 0) paco::CompletionModel::setThreads(o.threads);
   timer.start("load model");
   const auto model = paco::CompletionModel::load(o.model);
+  const auto extent_head = paco::app::loadExtentHead(knowledge, *model);
   timer.stop();
   std::printf("model '%s': preset %s, %.2f M parameters\n", o.model.c_str(),
               model->config().name.c_str(), model->parameterCount() / 1e6);
@@ -134,7 +136,7 @@ int run(int argc, char** argv) {
   std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
               scan.has_normals ? ", with normals" : "");
   paco::app::reportCoordinateOffset(scan.coordinate_offset);
-  const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
+  paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // Labels name input points, so a labelled input is used as it is.
   const auto cloud = o.use_labels ? std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points)
                                   : o.scan.workingCloudOf(scan.points, timer);
@@ -163,6 +165,7 @@ int run(int argc, char** argv) {
 
   std::vector<paco::PlanarPrimitive> primitives =
       paco::app::completeScan(model, cloud, segmentation, o.completion.threshold, o.completion.turns, o.points, timer);
+  if (extent_head) paco::app::guessHiddenExtent(model, *extent_head, cloud, segmentation, scan_knowledge, timer);
   if (!o.completion.no_fusion)
     paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.completion.fusion, scan_knowledge, timer);
   if (primitives.empty())

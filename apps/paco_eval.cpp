@@ -63,6 +63,7 @@ struct Options {
   int threads = 1;
   bool no_normals = false;
   bool known_extent_oracle = false;
+  std::string extent_head;
   bool scanner_at_viewpoint = false;
   std::vector<std::string> compare;
 };
@@ -288,6 +289,11 @@ int dataset(const Options& o) {
   b.method.completion_threads = o.threads;
   b.drop_input_normals = o.no_normals;
   b.method.known_extent_oracle = o.known_extent_oracle;
+  if (!o.extent_head.empty() && !b.method.fuse_observed)
+    throw paco::app::UsageError("--extent-head works through the box fill of observed fusion: drop --observed-fusion off");
+  if (!o.extent_head.empty() && o.known_extent_oracle)
+    throw paco::app::UsageError("--extent-head guesses the extent that --known-extent-oracle gives: choose one");
+  b.method.extent_head = o.extent_head;
   if (o.scanner_at_viewpoint && !b.method.fuse_observed)
     throw paco::app::UsageError("--scanner-at-viewpoint works through observed fusion: drop --observed-fusion off");
   b.method.use_scanner_position = o.scanner_at_viewpoint;
@@ -358,6 +364,9 @@ int run(int argc, char** argv) {
       ("no-normals", po::bool_switch(&o.no_normals), "give the methods the input points without normals (they are estimated)")
       ("known-extent-oracle", po::bool_switch(&o.known_extent_oracle),
        "paco, with fusion: the box fill knows the part's extent from the GT (an oracle: what completion scores when the extent is known)")
+      ("extent-head", po::value(&o.extent_head),
+       "paco, with fusion: a hidden-extent head for the model (paco_train --extent-head-for); the box fill reaches "
+       "as far beyond the scan as it guesses")
       ("scanner-at-viewpoint", po::bool_switch(&o.scanner_at_viewpoint),
        "paco, with fusion: the scanner stood at each sample's viewpoint, as paco_reconstruct --seen-from-point says "
        "(needs a dataset built with --mode visibility --single-scanner)")

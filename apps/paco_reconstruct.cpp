@@ -101,7 +101,7 @@ int run(int argc, char** argv) {
   if (o.output.empty()) throw paco::app::UsageError("expected -o MESH");
   const paco::app::ScanKnowledge knowledge = o.completion.validate();
   if (!knowledge.empty() && o.no_completion)
-    throw paco::app::UsageError("--known-extent, --seen-from and --seen-from-point bound the completed scan: drop "
+    throw paco::app::UsageError("--known-extent, --extent-head, --seen-from and --seen-from-point bound the completed scan: drop "
                                 "--no-completion");
   o.scan.validate();
   paco::app::validateThreads("--threads", o.threads, "all cores");
@@ -113,7 +113,8 @@ int run(int argc, char** argv) {
   paco::app::checkOutputPath(o.vg_output, "--vg", {".vg", ".bvg"});
   paco::app::checkOutputPath(o.pcd_output, "--pcd", {".pcd"});
   paco::app::checkOutputsAreNotInputs(
-      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.completion.knowledge.known_extent}},
+      {{"INPUT", o.input}, {"--model", o.model}, {"--known-extent", o.completion.knowledge.known_extent},
+       {"--extent-head", o.completion.knowledge.extent_head}},
       {{"-o", o.output}, {"--vg", o.vg_output}, {"--pcd", o.pcd_output}});
 
   // Check everything that can be checked before the slow work: names, model file, input file.
@@ -125,6 +126,7 @@ int run(int argc, char** argv) {
   assembler.setMaxCandidateFaces(o.max_candidate_faces);
   assembler.setWarmStart(!o.no_warm_start);
   paco::CompletionModel::ConstPtr model;
+  paco::HiddenExtentModel::ConstPtr extent_head;
   paco::app::StageTimer timer;
   if (!o.no_completion) {
     if (o.model.empty()) o.model = paco::CompletionModel::findShippedModel();
@@ -134,6 +136,7 @@ int run(int argc, char** argv) {
     if (o.threads > 0) paco::CompletionModel::setThreads(o.threads);
     timer.start("load model");
     model = paco::CompletionModel::load(o.model);
+    extent_head = paco::app::loadExtentHead(knowledge, *model);
     timer.stop();
   }
 
@@ -147,7 +150,7 @@ int run(int argc, char** argv) {
   std::printf("read '%s': %zu points%s\n", o.input.c_str(), scan.points.size(),
               scan.has_normals ? ", with normals" : " (normals will be estimated)");
   paco::app::reportCoordinateOffset(scan.coordinate_offset);
-  const paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
+  paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
   // A file without normals reads as zero normals, which the segmenter estimates.
   const auto cloud = o.scan.workingCloudOf(scan.points, timer);
 
@@ -175,6 +178,7 @@ int run(int argc, char** argv) {
   } else {
     primitives = paco::app::completeScan(model, cloud, segmentation, o.completion.threshold, o.completion.turns,
                                          paco::TurnEnsembleOptions().num_points, timer);
+    if (extent_head) paco::app::guessHiddenExtent(model, *extent_head, cloud, segmentation, scan_knowledge, timer);
     if (!o.completion.no_fusion)
       paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.completion.fusion, scan_knowledge, timer);
   }

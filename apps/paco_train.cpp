@@ -10,6 +10,7 @@
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
 #include <paco/completion/checkpoint.h>
+#include <paco/completion/hidden_extent.h>
 #include <paco/completion/trainer.h>
 #include <paco/data/dataset.h>
 #include <paco/encoding/model_config.h>
@@ -57,6 +58,7 @@ struct Options {
   bool quiet = false;
   std::string export_from;
   std::string init_from;
+  std::string extent_head_for;
 };
 
 // Writes the network of a training checkpoint without its training state: the file a user loads
@@ -72,6 +74,128 @@ int exportModel(const Options& o) {
   std::printf("exported '%s' (network '%s', %.2f M parameters) to '%s' (%.1f MB)\n", o.export_from.c_str(),
               checkpoint.config.name.c_str(), parameters / 1e6, o.output.c_str(),
               static_cast<double>(fs::file_size(o.output)) / 1e6);
+  return 0;
+}
+
+// The examples of one split of the datasets for a hidden-extent head: each sample's input with its
+// stored labels, seen by the model's network, and how far its complete part reaches beyond it.
+// Empty when interrupted.
+std::vector<paco::ExtentExample> extentExamples(const paco::CompletionModel::ConstPtr& model,
+                                                const std::vector<std::shared_ptr<const paco::data::Dataset>>& datasets,
+                                                paco::data::Split split, std::size_t limit, bool quiet) {
+  std::vector<std::pair<const paco::data::Dataset*, std::size_t>> picks;
+  std::size_t total = 0;
+  for (const auto& d : datasets) total += d->size(split);
+  const std::size_t wanted = limit == 0 ? total : std::min(limit, total);
+  // Evenly spaced over all samples, as --limit-train does for the network.
+  for (std::size_t k = 0; k < wanted; ++k) {
+    std::size_t index = k * total / wanted;
+    for (const auto& d : datasets) {
+      if (index < d->size(split)) {
+        picks.emplace_back(d.get(), index);
+        break;
+      }
+      index -= d->size(split);
+    }
+  }
+  std::vector<paco::ExtentExample> examples;
+  std::optional<paco::ProgressBar> bar;
+  if (!quiet) bar.emplace(split == paco::data::Split::Train ? "training samples" : "validation samples", picks.size());
+  for (const auto& [dataset, index] : picks) {
+    if (paco::interruptRequested()) return {};
+    const paco::data::Sample sample = dataset->load(split, index);
+    const auto segmentation = paco::PlanarSegmentation::fromLabels(sample.input, sample.input_labels);
+    if (!segmentation.empty()) {
+      const auto observation = paco::observeExtent(model, sample.input.makeShared(), segmentation);
+      std::vector<Eigen::Vector3d> complete;
+      for (const auto& p : sample.gt_points) complete.push_back(p.getVector3fMap().cast<double>());
+      examples.push_back({observation.features, paco::extentBeyond(observation, complete)});
+    }
+    if (bar) bar->advance();
+  }
+  if (bar) bar->finish();
+  return examples;
+}
+
+// How a head does on examples against the box fill's guess (nothing beyond the seen box), and
+// on the sides where the part goes on by more than 0.03 of the scan's diagonal.
+void reportExtent(const char* name, const paco::HiddenExtentModel& head, const std::vector<paco::ExtentExample>& examples) {
+  std::size_t short_sides = 0, other_sides = 0;
+  double gap = 0.0, predicted_short = 0.0, predicted_other = 0.0;
+  for (const auto& example : examples) {
+    const auto predicted = head.predict(example.features);
+    for (int s = 0; s < paco::kBoxSides; ++s) {
+      const auto side = static_cast<std::size_t>(s);
+      if (example.beyond[side] > 0.03) {
+        ++short_sides;
+        gap += example.beyond[side];
+        predicted_short += predicted[side];
+      } else {
+        ++other_sides;
+        predicted_other += predicted[side];
+      }
+    }
+  }
+  const double zero = paco::meanAbsoluteExtentError(nullptr, examples);
+  const double learnt = paco::meanAbsoluteExtentError(&head, examples);
+  std::printf("%s: %zu samples; mean error beyond the seen box %.4f (the box fill's, nothing beyond: %.4f, %.0f %%); "
+              "%zu sides short by > 0.03: gap %.3f, predicted %.3f; other sides predicted %.4f\n",
+              name, examples.size(), learnt, zero, zero > 0.0 ? 100.0 * learnt / zero : 0.0, short_sides,
+              short_sides ? gap / short_sides : 0.0, short_sides ? predicted_short / short_sides : 0.0,
+              other_sides ? predicted_other / other_sides : 0.0);
+}
+
+// paco_train DATASET... --extent-head-for MODEL -o HEAD.pt
+int trainExtentHead(const Options& o, const po::variables_map& vm) {
+  if (o.datasets.empty()) throw paco::app::UsageError("--extent-head-for needs DATASET_DIR (a folder written by paco_dataset)");
+  if (o.output.empty()) throw paco::app::UsageError("--extent-head-for needs -o HEAD.pt");
+  if (o.epochs < 1) throw paco::app::UsageError("--epochs must be at least 1 for a head, got " + std::to_string(o.epochs));
+  if (!(o.lr > 0.0)) throw paco::app::UsageError("--lr must be more than 0, got " + paco::app::shortNumber(o.lr));
+  paco::app::validateThreads("--threads", o.threads);
+  paco::app::checkOutputPath(o.output, "-o", {".pt"});
+  paco::app::checkOutputsAreNotInputs({{"--extent-head-for", o.extent_head_for}}, {{"-o", o.output}});
+  torch::set_num_threads(o.threads);
+  paco::warnIfSlowBlas();
+  const auto model = paco::CompletionModel::load(o.extent_head_for);
+  std::vector<std::shared_ptr<const paco::data::Dataset>> datasets;
+  for (const auto& folder : o.datasets) datasets.push_back(std::make_shared<const paco::data::Dataset>(folder));
+  paco::app::PendingOutput output(o.output);
+  paco::InterruptGuard guard;
+  const auto interrupted = [] {
+    std::printf("interrupted: no head written\n");
+    return 130;
+  };
+  const auto train = extentExamples(model, datasets, paco::data::Split::Train, o.limit_train, o.quiet);
+  if (paco::interruptRequested()) return interrupted();
+  if (train.empty())
+    throw paco::InvalidInputError("no training sample with a labelled plane in the datasets; build them with "
+                                  "paco_dataset (--segment labels them as paco_reconstruct does)");
+  const auto val = extentExamples(model, datasets, paco::data::Split::Val, o.limit_val == 0 ? 1500 : o.limit_val, o.quiet);
+  if (paco::interruptRequested()) return interrupted();
+  paco::ExtentTrainingOptions options;
+  options.epochs = o.epochs;
+  options.learning_rate = vm["lr"].defaulted() ? 1e-3 : o.lr;  // the network's default suits a 4 M network, not a head
+  options.seed = o.seed;
+  std::optional<paco::ProgressBar> bar;
+  if (!o.quiet) bar.emplace("epochs", static_cast<std::size_t>(o.epochs));
+  options.after_epoch = [&](int, double l1) {
+    if (bar) {
+      char status[48];
+      std::snprintf(status, sizeof status, "train L1 %.4f", l1);
+      bar->setStatus(status);
+      bar->advance();
+    }
+    return !paco::interruptRequested();
+  };
+  const auto head = paco::trainHiddenExtentModel(paco::networkFingerprint(*model), train, options);
+  if (bar) bar->finish();
+  if (paco::interruptRequested()) return interrupted();
+  reportExtent("training", *head, train);
+  if (!val.empty()) reportExtent("validation", *head, val);
+  head->save(output.writePath());
+  output.commit();
+  std::printf("wrote the hidden-extent head '%s' for '%s' (%zu training samples, %d epochs, lr %g)\n", o.output.c_str(),
+              o.extent_head_for.c_str(), train.size(), o.epochs, options.learning_rate);
   return 0;
 }
 
@@ -94,7 +218,8 @@ class NewFolderCleanup {
 
 void printHelp(const po::options_description& visible) {
   std::cout << "Usage: " << kTool << " DATASET_DIR... -o CHECKPOINT_DIR [options]\n"
-            << "       " << kTool << " --export CHECKPOINT -o MODEL.pt   (the network alone, for paco_reconstruct)\n\n"
+            << "       " << kTool << " --export CHECKPOINT -o MODEL.pt   (the network alone, for paco_reconstruct)\n"
+            << "       " << kTool << " DATASET_DIR... --extent-head-for MODEL.pt -o HEAD.pt   (a hidden-extent head)\n\n"
             << "Trains the PaCo network on dataset folders written by paco_dataset (several: their\n"
             << "samples are used together, e.g. inputs cut by distance and inputs seen by one scanner). Writes\n"
             << "CHECKPOINT_DIR/last.pt (every epoch, and on Ctrl-C), CHECKPOINT_DIR/best.pt (lowest\n"
@@ -157,6 +282,10 @@ int run(int argc, char** argv) {
       ("gt-points", po::value(&o.gt_points)->default_value(o.gt_points), "GT points per sample")
       ("prefetch", po::value(&o.prefetch)->default_value(o.prefetch), "batches loaded ahead by the background thread")
       ("export", po::value(&o.export_from), "write the network of this checkpoint (e.g. best.pt) without its training state to -o FILE")
+      ("extent-head-for", po::value(&o.extent_head_for),
+       "instead of the network, train a hidden-extent head for this model on the datasets' samples and their "
+       "stored labels (-o HEAD.pt; --epochs, --lr (default here 1e-3), --limit-train, --limit-val (default 1500), "
+       "--seed, --threads apply; doc/completion.md)")
       ("checkpoint-every", po::value(&o.checkpoint_every)->default_value(o.checkpoint_every),
        "also save last.pt every N steps inside an epoch (0 = only at epoch ends), so a killed run loses little")
       ("quiet", po::bool_switch(&o.quiet), "no progress bars");
@@ -173,6 +302,7 @@ int run(int argc, char** argv) {
     if (o.output.empty()) throw paco::app::UsageError("--export needs -o MODEL.pt");
     return exportModel(o);
   }
+  if (!o.extent_head_for.empty()) return trainExtentHead(o, vm);
   if (o.datasets.empty()) throw paco::app::UsageError("expected DATASET_DIR (a folder written by paco_dataset)");
   if (o.output.empty()) throw paco::app::UsageError("expected -o CHECKPOINT_DIR");
   paco::app::validateThreads("--threads", o.threads);

@@ -9,6 +9,7 @@
 
 #include <paco/common/angles.h>
 #include <paco/completion/checkpoint.h>
+#include <paco/completion/hidden_extent.h>
 
 #include "tiny_model_config.h"
 #endif
@@ -353,6 +354,61 @@ TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {
   ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("seen.obj")), &log), 0) << log;
   paco::boundingBox(paco::io::loadMesh(dir.file("seen.obj")), lo, hi);
   EXPECT_NEAR(hi.x(), 1.0, 0.01) << log;
+}
+
+// The same half box with a hidden-extent head trained on other scans of it, which all go on by
+// the scan's length along +x: the box fill closes the hidden side at x = 2. A head of
+// another network, or one together with --known-extent or --no-fusion, is refused.
+TEST(PacoReconstruct, AnExtentHeadClosesTheHiddenSideWhereItGuesses) {
+  TempDir dir;
+  torch::manual_seed(4);
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  const auto model = paco::CompletionModel::load(dir.file("tiny.pt"));
+  // Scans of the half box sampled with other seeds, their faces as segments, each with how far
+  // the whole box goes on: a head learns from them what this scan's features say.
+  std::vector<paco::ExtentExample> examples;
+  const paco::SurfaceMesh box = paco::test::makeBox({0, 0, 0}, {2, 1, 1});
+  const std::vector<Eigen::Vector3d> whole = {{0, 0, 0}, {2, 1, 1}};
+  for (std::uint64_t seed = 10; seed < 58; ++seed) {
+    const paco::test::FaceLabelledScan scan =
+        paco::test::scanByFace(box, 8000, seed, [](const Eigen::Vector3d& p) { return p.x() <= 1.0; });
+    const paco::ExtentObservation observation = paco::observeExtent(model, scan.cloud, scan.segmentation);
+    examples.push_back({observation.features, paco::extentBeyond(observation, whole)});
+  }
+  paco::ExtentTrainingOptions training;
+  training.epochs = 1000;
+  training.batch = 16;
+  paco::trainHiddenExtentModel(paco::networkFingerprint(*model), examples, training)->save(dir.file("head.pt"));
+  writeHalfBoxScan(dir.file("half_box.pcd"), Eigen::Matrix3d::Identity());
+  const std::string base = tool() + " " + quoted(dir.file("half_box.pcd")) + " --model " + quoted(dir.file("tiny.pt")) +
+                           " --threshold 1 --assembler cell-complex --extent-head " + quoted(dir.file("head.pt")) + " -o ";
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("guessed.obj")), &log), 0) << log;
+  EXPECT_NE(log.find("box fill to the guessed extent"), std::string::npos) << log;
+  EXPECT_NE(log.find("hidden extent ("), std::string::npos) << log;
+  const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("guessed.obj"));
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  Eigen::Vector3d lo, hi;
+  paco::boundingBox(mesh, lo, hi);
+  EXPECT_NEAR(hi.x(), 2.0, 0.05) << log;
+  EXPECT_NEAR(lo.x(), 0.0, 0.05) << log;
+  EXPECT_NEAR(hi.y(), 1.0, 0.05) << log;
+  EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 0.1) << log;
+
+  EXPECT_NE(paco::test::runCommand(base + quoted(dir.file("both.obj")) + " --known-extent 0,0,0,2,1,1", &log), 0);
+  EXPECT_NE(log.find("choose one"), std::string::npos) << log;
+  EXPECT_NE(paco::test::runCommand(base + quoted(dir.file("nofuse.obj")) + " --no-fusion", &log), 0);
+  EXPECT_NE(log.find("drop --no-fusion"), std::string::npos) << log;
+  paco::PacoNetwork other(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("other.pt"), other);
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("half_box.pcd")) + " --model " +
+                                       quoted(dir.file("other.pt")) + " --extent-head " + quoted(dir.file("head.pt")) +
+                                       " -o " + quoted(dir.file("other.obj")),
+                                   &log),
+            1);
+  EXPECT_NE(log.find("trained on another completion network"), std::string::npos) << log;
+  for (const char* name : {"both.obj", "nofuse.obj", "other.obj"}) EXPECT_FALSE(std::filesystem::exists(dir.file(name))) << name;
 }
 
 // The same half box in UTM coordinates (northing 5.4e6, where float32 steps by 0.5 m, half the

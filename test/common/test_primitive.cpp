@@ -33,6 +33,29 @@ TEST(PlanarSegmentation, LabelWithoutPlaneIsRejected) {
   EXPECT_THROW(seg.rebuildSegmentsFromLabels(), paco::InvalidInputError);
 }
 
+// Stored labels 4 (z = 0, normals down), 2 (x = 1), 7 (two points: no plane) and -1: two
+// segments in label order, each plane oriented like its points' normals.
+TEST(PlanarSegmentation, FromLabelsFitsAPlaneToEachLabelWithThreePoints) {
+  pcl::PointCloud<pcl::PointNormal> cloud;
+  auto add = [&](float x, float y, float z, float nx, float ny, float nz) {
+    pcl::PointNormal p;
+    p.x = x, p.y = y, p.z = z, p.normal_x = nx, p.normal_y = ny, p.normal_z = nz;
+    cloud.push_back(p);
+  };
+  add(0, 0, 0, 0, 0, -1), add(1, 0, 0, 0, 0, -1), add(0, 1, 0, 0, 0, -1);
+  add(1, 0, 0, 1, 0, 0), add(1, 1, 0, 1, 0, 0), add(1, 0, 1, 1, 0, 0);
+  add(5, 5, 5, 0, 0, 1), add(6, 5, 5, 0, 0, 1), add(9, 9, 9, 0, 0, 1);
+  const std::vector<int> labels = {4, 4, 4, 2, 2, 2, 7, 7, -1};
+  const auto seg = paco::PlanarSegmentation::fromLabels(cloud, labels);
+  ASSERT_EQ(seg.size(), 2u);
+  EXPECT_EQ(seg.labels, (std::vector<int>{1, 1, 1, 0, 0, 0, -1, -1, -1}));
+  EXPECT_NEAR(seg.planes[0].normal.x(), 1.0, 1e-9);
+  EXPECT_NEAR(seg.planes[0].offset, -1.0, 1e-9);
+  EXPECT_NEAR(seg.planes[1].normal.z(), -1.0, 1e-9);
+  EXPECT_EQ(seg.segments[1].indices, (std::vector<int>{0, 1, 2}));
+  EXPECT_THROW(paco::PlanarSegmentation::fromLabels(cloud, {0, 0}), paco::InvalidInputError);
+}
+
 TEST(PlanarPrimitive, MakePrimitivesCopiesPointsAndUsesPlaneNormalWhenMissing) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
   for (int i = 0; i < 5; ++i) cloud.push_back(pcl::PointXYZ(i, 0, 0));

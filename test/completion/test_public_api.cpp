@@ -23,23 +23,12 @@ namespace {
 
 // A 4 x 2 x 1 box far from the origin (user units), sampled with 2,048 points, segmented by face.
 struct SegmentedBox {
-  pcl::PointCloud<pcl::PointNormal>::Ptr cloud{new pcl::PointCloud<pcl::PointNormal>};
+  pcl::PointCloud<pcl::PointNormal>::Ptr cloud;
   PlanarSegmentation segmentation;
   SegmentedBox() {
-    SurfaceMesh box = test::makeBox({10, -5, 3}, {14, -3, 4});
-    const auto sample = sampleSurface(box, 2048, 7);
-    for (std::size_t f = 0; f < box.faces.size(); ++f)
-      segmentation.planes.push_back(
-          Plane::fromPointAndNormal(box.vertices[box.faces[f][0]], faceNormal(box, f)));
-    for (std::size_t i = 0; i < sample.points.size(); ++i) {
-      pcl::PointNormal p;
-      p.x = float(sample.points[i].x()), p.y = float(sample.points[i].y()), p.z = float(sample.points[i].z());
-      p.normal_x = float(sample.normals[i].x()), p.normal_y = float(sample.normals[i].y());
-      p.normal_z = float(sample.normals[i].z());
-      cloud->push_back(p);
-      segmentation.labels.push_back(int(sample.faces[i]));
-    }
-    segmentation.rebuildSegmentsFromLabels();
+    test::FaceLabelledScan scan = test::scanByFace(test::makeBox({10, -5, 3}, {14, -3, 4}), 2048, 7);
+    cloud = scan.cloud;
+    segmentation = std::move(scan.segmentation);
   }
 };
 

@@ -2,6 +2,7 @@
 #include <paco/common/progress.h>
 #include <paco/common/surface_mesh.h>
 #include <paco/completion/checkpoint.h>
+#include <paco/completion/hidden_extent.h>
 #include <paco/completion/trainer.h>
 
 #include <gtest/gtest.h>
@@ -461,6 +462,18 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
   EXPECT_EQ(exported.config.toJson(), tinyConfig().toJson());
   EXPECT_NE(paco::test::runCommand(tool + " --export " + dir.file("missing.pt") + " -o " + dir.file("m2.pt"), &output), 0);
   EXPECT_FALSE(std::filesystem::exists(dir.file("m2.pt")));
+  // --extent-head-for: a hidden-extent head for the exported model, from the same data.
+  const std::string head_base = tool + " " + dir.file("data") + " --threads 1 --quiet --epochs 3 --extent-head-for ";
+  ASSERT_EQ(paco::test::runCommand(head_base + dir.file("model.pt") + " -o " + dir.file("head.pt"), &output), 0) << output;
+  EXPECT_NE(output.find("training: 6 samples"), std::string::npos) << output;
+  EXPECT_NE(output.find("validation: 2 samples"), std::string::npos) << output;
+  const auto head = paco::HiddenExtentModel::load(dir.file("head.pt"));
+  EXPECT_NO_THROW(head->checkMatches(*paco::CompletionModel::load(dir.file("model.pt"))));
+  EXPECT_NE(paco::test::runCommand(head_base + dir.file("model.pt") + " -o " + dir.file("model.pt"), &output), 0);
+  EXPECT_NE(output.find("would replace that input"), std::string::npos) << output;
+  EXPECT_NE(paco::test::runCommand(head_base + dir.file("missing.pt") + " -o " + dir.file("h2.pt"), &output), 0);
+  EXPECT_NE(output.find("missing.pt"), std::string::npos) << output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("h2.pt")));
   // --init-from: a new run from the exported weights; not together with --resume.
   const std::string init_base = tool + " " + dir.file("data") + " -o " + dir.file("run2") +
                                 " --batch 2 --threads 1 --input-points 256 --gt-points 512 --quiet --init-from ";

@@ -80,4 +80,23 @@ void transformMesh(SurfaceMesh& mesh, const Eigen::Matrix3d& rotation, const Eig
   for (auto& v : mesh.vertices) v = rotation * v + translation;
 }
 
+FaceLabelledScan scanByFace(const SurfaceMesh& mesh, std::size_t count, std::uint64_t seed,
+                            const std::function<bool(const Eigen::Vector3d&)>& keep) {
+  FaceLabelledScan scan;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    scan.segmentation.planes.push_back(Plane::fromPointAndNormal(mesh.vertices[mesh.faces[f][0]], faceNormal(mesh, f)));
+  const SurfaceSample sample = sampleSurface(mesh, count, seed);
+  for (std::size_t i = 0; i < sample.points.size(); ++i) {
+    if (keep && !keep(sample.points[i])) continue;
+    pcl::PointNormal p;
+    p.x = float(sample.points[i].x()), p.y = float(sample.points[i].y()), p.z = float(sample.points[i].z());
+    p.normal_x = float(sample.normals[i].x()), p.normal_y = float(sample.normals[i].y());
+    p.normal_z = float(sample.normals[i].z());
+    scan.cloud->push_back(p);
+    scan.segmentation.labels.push_back(static_cast<int>(sample.faces[i]));
+  }
+  scan.segmentation.rebuildSegmentsFromLabels();
+  return scan;
+}
+
 }  // namespace paco::test

@@ -1,9 +1,15 @@
 #pragma once
 // Small closed, outward-oriented polyhedra with known planes, areas and volumes, for tests.
 // Richer CAD-like parts come from paco::data's procedural generator.
+#include <paco/common/primitive.h>
 #include <paco/common/surface_mesh.h>
 
 #include <Eigen/Core>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace paco::test {
@@ -30,5 +36,16 @@ SurfaceMesh makeUChannel(double width, double height, double wall, double length
 SurfaceMesh makeSquareTube(double outer, double wall, double length);
 /// Applies x -> R x + t to every vertex.
 void transformMesh(SurfaceMesh& mesh, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
+
+/// A scan of a mesh whose faces are each planar, segmented by face.
+struct FaceLabelledScan {
+  pcl::PointCloud<pcl::PointNormal>::Ptr cloud{new pcl::PointCloud<pcl::PointNormal>};
+  PlanarSegmentation segmentation;  ///< one segment per face of the mesh (in face order)
+};
+/// `count` points sampled on the mesh (paco::sampleSurface with `seed`), with their face's normal
+/// and labelled by their face; points for which `keep` (when given) is false are left out, the
+/// part a scan missed (their faces keep their planes, with fewer or no points).
+FaceLabelledScan scanByFace(const SurfaceMesh& mesh, std::size_t count, std::uint64_t seed,
+                            const std::function<bool(const Eigen::Vector3d&)>& keep = nullptr);
 
 }  // namespace paco::test

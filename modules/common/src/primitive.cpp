@@ -1,6 +1,7 @@
 #include <paco/common/error.h>
 #include <paco/common/primitive.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <type_traits>
@@ -25,6 +26,40 @@ void PlanarSegmentation::rebuildSegmentsFromLabels() {
                               " planes)");
     segments[l].indices.push_back(static_cast<int>(i));
   }
+}
+
+PlanarSegmentation PlanarSegmentation::fromLabels(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                                  const std::vector<int>& labels) {
+  if (labels.size() != cloud.size())
+    throw InvalidInputError("PlanarSegmentation::fromLabels: " + std::to_string(labels.size()) + " labels for " +
+                            std::to_string(cloud.size()) + " points");
+  int count = 0;
+  for (int l : labels) count = std::max(count, l + 1);
+  std::vector<std::vector<Eigen::Vector3d>> groups(static_cast<std::size_t>(count));
+  std::vector<Eigen::Vector3d> hints(static_cast<std::size_t>(count), Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (labels[i] < 0) continue;
+    const auto l = static_cast<std::size_t>(labels[i]);
+    groups[l].push_back(cloud[i].getVector3fMap().cast<double>());
+    const Eigen::Vector3d n = cloud[i].getNormalVector3fMap().cast<double>();
+    if (n.allFinite()) hints[l] += n;
+  }
+  PlanarSegmentation seg;
+  std::vector<int> renumber(static_cast<std::size_t>(count), -1);
+  for (std::size_t l = 0; l < groups.size(); ++l) {
+    if (groups[l].size() < 3) continue;
+    try {
+      seg.planes.push_back(Plane::fit(groups[l], hints[l]));
+      renumber[l] = static_cast<int>(seg.planes.size()) - 1;
+    } catch (const Error&) {
+      // collinear points: no plane
+    }
+  }
+  seg.labels.resize(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    seg.labels[i] = labels[i] >= 0 ? renumber[static_cast<std::size_t>(labels[i])] : -1;
+  seg.rebuildSegmentsFromLabels();
+  return seg;
 }
 
 void PlanarSegmentation::rebuildLabelsFromSegments(std::size_t num_points) {

@@ -3,13 +3,14 @@
 #include <paco/completion/parametric_completer.h>
 #include <paco/encoding/completion_model_impl.h>
 
+#include "decoder_access.h"
+
 #include <algorithm>
 #include <cmath>
 
 namespace paco {
-namespace {
+namespace detail {
 
-// Builds (once per model) the stage-3 network from the model file and loads its weights.
 CompletionDecoder decoderOf(CompletionModel::Impl& impl) {
   if (!impl.decoder) {
     torch::serialize::InputArchive archive;
@@ -29,7 +30,24 @@ CompletionDecoder decoderOf(CompletionModel::Impl& impl) {
   return CompletionDecoder(std::dynamic_pointer_cast<CompletionDecoderImpl>(impl.decoder));
 }
 
-}  // namespace
+PlaneProxyOutput decoderInputOf(const PlaneProxies& proxies) {
+  const int K = proxies.slots, C = proxies.width;
+  PlaneProxyOutput in;
+  in.proxies = torch::from_blob(const_cast<float*>(proxies.features.data()), {1, K, C}).clone();
+  in.mask = torch::zeros({1, K}, torch::kBool);
+  in.slot_normals = torch::zeros({1, K, 3});
+  in.slot_offsets = torch::zeros({1, K});
+  for (int s = 0; s < K; ++s) {
+    if (!proxies.mask[static_cast<std::size_t>(s)]) continue;
+    in.mask[0][s] = true;
+    const Plane& plane = proxies.slot_planes[static_cast<std::size_t>(s)];
+    for (int a = 0; a < 3; ++a) in.slot_normals[0][s][a] = static_cast<float>(plane.normal[a]);
+    in.slot_offsets[0][s] = static_cast<float>(-plane.offset);
+  }
+  return in;
+}
+
+}  // namespace detail
 
 ParametricCompleter::ParametricCompleter() = default;
 ParametricCompleter::~ParametricCompleter() = default;
@@ -64,26 +82,13 @@ void ParametricCompleter::initCompute() {
 }
 
 void ParametricCompleter::computePrimitives(std::vector<PlanarPrimitive>& primitives) {
-  const int K = proxies_.slots, C = proxies_.width;
-  PlaneProxyOutput in;
-  in.proxies = torch::from_blob(const_cast<float*>(proxies_.features.data()), {1, K, C}).clone();
-  in.mask = torch::zeros({1, K}, torch::kBool);
-  in.slot_normals = torch::zeros({1, K, 3});
-  in.slot_offsets = torch::zeros({1, K});
-  for (int s = 0; s < K; ++s) {
-    if (!proxies_.mask[s]) continue;
-    in.mask[0][s] = true;
-    const Plane& plane = proxies_.slot_planes[static_cast<std::size_t>(s)];
-    for (int a = 0; a < 3; ++a) in.slot_normals[0][s][a] = static_cast<float>(plane.normal[a]);
-    in.slot_offsets[0][s] = static_cast<float>(-plane.offset);
-  }
-
+  const PlaneProxyOutput in = detail::decoderInputOf(proxies_);
   auto& impl = *model_->impl();
   NetworkOutput out;
   {
     std::lock_guard<std::mutex> lock(impl.mutex);
     torch::NoGradGuard no_grad;
-    out = decoderOf(impl)->forward(in);
+    out = detail::decoderOf(impl)->forward(in);
   }
   auto confidence = torch::sigmoid(out.logits[0]).contiguous();
   auto normals = out.normals[0].contiguous();

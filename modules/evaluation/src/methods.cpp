@@ -13,6 +13,7 @@
 #include <paco/segmentation/thinning.h>
 #endif
 #ifdef PACO_EVALUATION_WITH_COMPLETION
+#include <paco/completion/hidden_extent.h>
 #include <paco/completion/observed_fusion.h>
 #include <paco/completion/parametric_completer.h>
 #include <paco/completion/turn_ensemble.h>
@@ -74,29 +75,7 @@ std::map<std::string, Entry>& registry() {
     if (in.input_labels.size() != in.input.size())
       throw InvalidInputError("the sample has " + std::to_string(in.input_labels.size()) + " input labels for " +
                               std::to_string(in.input.size()) + " points; rebuild the dataset");
-    int count = 0;
-    for (int l : in.input_labels) count = std::max(count, l + 1);
-    std::vector<std::vector<Eigen::Vector3d>> groups(static_cast<std::size_t>(count));
-    for (std::size_t i = 0; i < in.input.size(); ++i)
-      if (in.input_labels[i] >= 0) groups[static_cast<std::size_t>(in.input_labels[i])].push_back(in.input[i].getVector3fMap().cast<double>());
-    std::vector<int> renumber(static_cast<std::size_t>(count), -1);
-    for (int l = 0; l < count; ++l) {
-      if (groups[static_cast<std::size_t>(l)].size() < 3) continue;
-      // Orient like the points' normals (the label's first point is as good as any).
-      Eigen::Vector3d hint = Eigen::Vector3d::Zero();
-      for (std::size_t i = 0; i < in.input.size(); ++i)
-        if (in.input_labels[i] == l) hint += in.input[i].getNormalVector3fMap().cast<double>();
-      try {
-        seg.planes.push_back(Plane::fit(groups[static_cast<std::size_t>(l)], hint));
-        renumber[static_cast<std::size_t>(l)] = static_cast<int>(seg.planes.size()) - 1;
-      } catch (const Error&) {
-        // collinear points: no plane
-      }
-    }
-    seg.labels.resize(in.input.size());
-    for (std::size_t i = 0; i < in.input.size(); ++i)
-      seg.labels[i] = in.input_labels[i] >= 0 ? renumber[static_cast<std::size_t>(in.input_labels[i])] : -1;
-    seg.rebuildSegmentsFromLabels();
+    seg = PlanarSegmentation::fromLabels(in.input, in.input_labels);
   } else {
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
     auto segmenter = makePlanarSegmenter<pcl::PointNormal>(options.segmenter);
@@ -285,6 +264,16 @@ CompletionModel::ConstPtr cachedModel(const std::string& path, int threads) {
   return model;
 }
 
+// One loaded hidden-extent head per file for the whole run.
+HiddenExtentModel::ConstPtr cachedExtentHead(const std::string& path) {
+  static std::mutex mutex;
+  static std::map<std::string, HiddenExtentModel::ConstPtr> heads;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& head = heads[path];
+  if (!head) head = HiddenExtentModel::load(path);
+  return head;
+}
+
 static_assert(kMaxEnsembleTurns == paco::kMaxEnsembleTurns, "evaluation restates the completion module's limit");
 
 MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
@@ -323,6 +312,14 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     ensemble.threshold = options.confidence_threshold;
     primitives = completeWithTurns(model, in.input.makeShared(), segmentation, ensemble);
   }
+  std::vector<Eigen::Vector3d> guessed_extent;
+  if (!options.extent_head.empty()) {
+    if (!options.fuse_observed)
+      throw InvalidInputError("the hidden-extent head works through the box fill of observed fusion; turn fusion on");
+    guessed_extent =
+        estimateHiddenExtent(model, *cachedExtentHead(options.extent_head), in.input.makeShared(), segmentation)
+            .corners();
+  }
   out.seconds["complete"] = secondsSince(start);
   if (options.fuse_observed) {
     const auto fuse_start = std::chrono::steady_clock::now();
@@ -333,6 +330,7 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     fusion.unseen_point_fraction = options.unseen_point_fraction;
     fusion.contradiction_radius = options.contradiction_radius;
     fusion.join_distance = options.join_distance;
+    fusion.known_extent_points = guessed_extent;
     if (options.known_extent_oracle) fusion.known_extent_points = positionsOf(in.gt_points);
     if (options.use_scanner_position) {
       if (!in.scanner_position)

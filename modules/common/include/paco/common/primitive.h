@@ -37,6 +37,12 @@ struct PlanarSegmentation {
   void rebuildLabelsFromSegments(std::size_t num_points);
   /// Throws InvalidInputError when labels, planes and segments disagree.
   void validate(std::size_t num_points) const;
+
+  /// The segmentation that stored per-point labels describe (a dataset's input labels): one
+  /// segment per label >= 0, in increasing label order, with the plane fitted to its points and
+  /// oriented by their summed normals. A label with fewer than 3 points or collinear points gets
+  /// no segment; its points get -1. Throws InvalidInputError when the sizes differ.
+  static PlanarSegmentation fromLabels(const pcl::PointCloud<pcl::PointNormal>& cloud, const std::vector<int>& labels);
 };
 
 /// One primitive per segment: its plane and its points. Points without normals get the plane's.

@@ -124,6 +124,9 @@ struct MethodOptions {
   /// (paco::ObservedFusionOptions::known_extent_points). An oracle for analysis: what the
   /// pipeline scores when the part's extent is known (default false).
   bool known_extent_oracle = false;
+  /// paco, with fusion: a hidden-extent head file (paco::HiddenExtentModel, trained for `model`);
+  /// the box fill reaches as far beyond the scan as it guesses. Empty (default): no head.
+  std::string extent_head;
   /// paco, with fusion: drop the completed points that a scanner at MethodInput::scanner_position
   /// would have seen (paco::ObservedFusionOptions::scanner_position), as `paco_reconstruct
   /// --seen-from-point` does (default false).

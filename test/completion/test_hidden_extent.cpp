@@ -1,0 +1,208 @@
+#include "shapes.h"
+#include "test_support.h"
+#include "tiny_model_config.h"
+
+#include <paco/common/error.h>
+#include <paco/completion/checkpoint.h>
+#include <paco/completion/hidden_extent.h>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+namespace paco {
+namespace {
+
+TEST(HiddenExtent, BeyondIsHowFarTheWholeObjectReachesPastEachSideOfTheSeenBox) {
+  ExtentObservation observation;
+  observation.frame.center = Eigen::Vector3d(10, 0, 0);
+  observation.frame.scale = 0.5;  // user units -> frame units
+  observation.seen_box = Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1));
+  // In the frame: x from -1 to 1.6, y from -1.2 to 0.5, z from -1 to 1.
+  const std::vector<Eigen::Vector3d> whole = {{8, 0, -2}, {13.2, -2.4, 2}, {10, 1, 0}};
+  const auto beyond = extentBeyond(observation, whole);
+  const std::array<float, kBoxSides> expected = {0.0f, 0.2f, 0.0f, 0.6f, 0.0f, 0.0f};
+  for (int s = 0; s < kBoxSides; ++s) EXPECT_NEAR(beyond[s], expected[s], 1e-6) << "side " << s;
+}
+
+TEST(HiddenExtent, CornersAreTheGrownBoxInTheUsersFrame) {
+  HiddenExtent extent;
+  extent.frame.center = Eigen::Vector3d(1, 2, 3);
+  extent.frame.scale = 2.0;
+  extent.frame.rotation = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  extent.seen_box = Eigen::AlignedBox3d(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5));
+  extent.beyond = {0, 0, 0, 1.0, 0, 0};  // the frame's +x side, 1 frame unit = 0.5 user units
+  const Eigen::AlignedBox3d grown = extent.grownBox();
+  EXPECT_DOUBLE_EQ(grown.max().x(), 1.5);
+  EXPECT_DOUBLE_EQ(extent.largestInUserUnits(), 0.5);
+  Eigen::AlignedBox3d user;
+  for (const auto& c : extent.corners()) user.extend(c);
+  ASSERT_EQ(extent.corners().size(), 8u);
+  // The frame's +x is the user's -y (rotation user -> frame is +90 deg about z): the box reaches
+  // 0.25 + 0.5 below the centre along y, 0.25 elsewhere.
+  EXPECT_NEAR(user.min().y(), 2 - 0.75, 1e-12);
+  EXPECT_NEAR(user.max().y(), 2 + 0.25, 1e-12);
+  EXPECT_NEAR(user.min().x(), 1 - 0.25, 1e-12);
+  EXPECT_NEAR(user.max().x(), 1 + 0.25, 1e-12);
+  EXPECT_NEAR(user.max().z(), 3 + 0.25, 1e-12);
+}
+
+// Examples whose +x side reaches 0.3 beyond the seen box exactly when their first feature is
+// positive: a head must read it off the features.
+std::vector<ExtentExample> signExamples(int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> normal;
+  std::vector<ExtentExample> examples(static_cast<std::size_t>(count));
+  for (auto& e : examples) {
+    for (int f = 0; f < 5; ++f) e.features.push_back(normal(rng));
+    e.beyond[3] = e.features[0] > 0.0f ? 0.3f : 0.0f;
+  }
+  return examples;
+}
+
+TEST(HiddenExtentHead, LearnsFromItsFeaturesWhichSideGoesOnAndHowFar) {
+  const auto train = signExamples(400, 1), held_out = signExamples(200, 2);
+  ExtentTrainingOptions options;
+  options.epochs = 300;
+  options.hidden = 32;
+  options.batch = 64;
+  std::vector<double> losses;
+  options.after_epoch = [&](int, double l1) {
+    losses.push_back(l1);
+    return true;
+  };
+  const auto head = trainHiddenExtentModel(42, train, options);
+  ASSERT_EQ(losses.size(), 300u);
+  EXPECT_LT(losses.back(), 0.5 * losses.front());
+  const double zero = meanAbsoluteExtentError(nullptr, held_out);
+  EXPECT_NEAR(zero, 0.3 * 0.5 / 6, 0.01);  // about half the examples are short by 0.3 on one of six sides
+  // A guess blind to the features does no better than 0 on all sides.
+  EXPECT_LT(meanAbsoluteExtentError(head.get(), held_out), 0.5 * zero);
+  EXPECT_EQ(head->networkFingerprint(), 42u);
+  EXPECT_EQ(head->featureWidth(), 5);
+}
+
+TEST(HiddenExtentHead, StopsWhenAskedAfterAnEpoch) {
+  ExtentTrainingOptions options;
+  options.epochs = 50;
+  int epochs = 0;
+  options.after_epoch = [&](int epoch, double) {
+    epochs = epoch;
+    return epoch < 3;
+  };
+  trainHiddenExtentModel(1, signExamples(20, 3), options);
+  EXPECT_EQ(epochs, 3);
+}
+
+TEST(HiddenExtentHead, RejectsNoExampleAndUnequalFeatures) {
+  EXPECT_THROW(trainHiddenExtentModel(1, {}, {}), InvalidInputError);
+  auto examples = signExamples(3, 4);
+  examples[1].features.pop_back();
+  EXPECT_THROW(trainHiddenExtentModel(1, examples, {}), InvalidInputError);
+}
+
+TEST(HiddenExtentHead, SavedAndLoadedPredictsTheSame) {
+  test::TempDir dir;
+  ExtentTrainingOptions options;
+  options.epochs = 5;
+  const auto examples = signExamples(50, 5);
+  const auto head = trainHiddenExtentModel(7, examples, options);
+  head->save(dir.file("head.pt"));
+  const auto loaded = HiddenExtentModel::load(dir.file("head.pt"));
+  EXPECT_EQ(loaded->networkFingerprint(), 7u);
+  EXPECT_EQ(loaded->featureWidth(), 5);
+  for (int i = 0; i < 5; ++i) {
+    const auto a = head->predict(examples[i].features), b = loaded->predict(examples[i].features);
+    for (int s = 0; s < kBoxSides; ++s) EXPECT_FLOAT_EQ(a[s], b[s]);
+  }
+  EXPECT_THROW(loaded->predict({1.0f, 2.0f}), InvalidInputError);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("head.pt.partial")));
+}
+
+TEST(HiddenExtentHead, LoadSaysWhatIsWrongWithABadFile) {
+  test::TempDir dir;
+  auto expectModelError = [](const std::string& path, const std::string& words) {
+    try {
+      HiddenExtentModel::load(path);
+      ADD_FAILURE() << "no error for " << path;
+    } catch (const ModelError& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  expectModelError(dir.file("missing.pt"), "does not exist");
+  ExtentTrainingOptions options;
+  options.epochs = 1;
+  trainHiddenExtentModel(7, signExamples(10, 6), options)->save(dir.file("head.pt"));
+  const auto size = std::filesystem::file_size(dir.file("head.pt"));
+  std::filesystem::copy_file(dir.file("head.pt"), dir.file("cut.pt"));
+  std::filesystem::resize_file(dir.file("cut.pt"), size / 2);
+  expectModelError(dir.file("cut.pt"), "corrupt or truncated");
+  // A completion model is not a head.
+  PacoNetwork net(test::tinyModelConfig());
+  saveCheckpoint(dir.file("network.pt"), net);
+  expectModelError(dir.file("network.pt"), "not a hidden-extent head");
+}
+
+// A 4 x 2 x 1 box whose scan stops at x = 12: the part from 12 to 14 was never seen.
+struct CutBoxScan {
+  pcl::PointCloud<pcl::PointNormal>::Ptr cloud;
+  PlanarSegmentation segmentation;
+  std::vector<Eigen::Vector3d> whole = {{10, -5, 3}, {14, -3, 4}};
+  CutBoxScan() {
+    test::FaceLabelledScan scan = test::scanByFace(test::makeBox({10, -5, 3}, {14, -3, 4}), 4096, 7,
+                                                   [](const Eigen::Vector3d& p) { return p.x() <= 12.0; });
+    cloud = scan.cloud;
+    segmentation = std::move(scan.segmentation);
+  }
+};
+
+TEST(HiddenExtentWithModel, AHeadFitToAScanGrowsItsBoxBackToTheWholeObject) {
+  torch::manual_seed(2);
+  test::TempDir dir;
+  PacoNetwork net(test::tinyModelConfig());
+  saveCheckpoint(dir.file("tiny.pt"), net);
+  const auto model = CompletionModel::load(dir.file("tiny.pt"));
+  const CutBoxScan scan;
+
+  const ExtentObservation observation = observeExtent(model, scan.cloud, scan.segmentation);
+  ASSERT_EQ(static_cast<int>(observation.features.size()), model->config().global_width + 3);
+  EXPECT_NEAR(observation.seen_box.diagonal().norm(), 1.0, 1e-6);  // the frame has the scan at unit diagonal
+  const auto target = extentBeyond(observation, scan.whole);
+  // The box's faces lie on the axes, so the frame keeps them there: one side is short by
+  // 2 / diagonal(2, 2, 1) = 2/3, the others not at all.
+  float largest = 0.0f, others = 0.0f;
+  for (float b : target) largest = std::max(largest, b);
+  for (float b : target) others += b;
+  EXPECT_NEAR(largest, 2.0 / 3.0, 0.01);
+  EXPECT_NEAR(others - largest, 0.0, 0.01);
+
+  // Overfit one example: the head then guesses this scan's hidden extent. (One example has no
+  // spread, so only the biases learn: a high rate gets them there.)
+  ExtentTrainingOptions options;
+  options.epochs = 400;
+  options.hidden = 16;
+  options.learning_rate = 0.03;
+  const auto head = trainHiddenExtentModel(networkFingerprint(*model), {{observation.features, target}}, options);
+  const HiddenExtent extent = estimateHiddenExtent(model, *head, scan.cloud, scan.segmentation);
+  Eigen::AlignedBox3d guessed;
+  for (const auto& c : extent.corners()) guessed.extend(c);
+  EXPECT_NEAR(guessed.min().x(), 10.0, 0.1);
+  EXPECT_NEAR(guessed.max().x(), 14.0, 0.1);
+  EXPECT_NEAR(guessed.min().y(), -5.0, 0.1);
+  EXPECT_NEAR(guessed.max().y(), -3.0, 0.1);
+  EXPECT_NEAR(guessed.max().z(), 4.0, 0.1);
+
+  // Another network's head is refused.
+  torch::manual_seed(3);
+  PacoNetwork other(test::tinyModelConfig());
+  saveCheckpoint(dir.file("other.pt"), other);
+  const auto other_model = CompletionModel::load(dir.file("other.pt"));
+  EXPECT_NE(networkFingerprint(*other_model), networkFingerprint(*model));
+  EXPECT_THROW(estimateHiddenExtent(other_model, *head, scan.cloud, scan.segmentation), ModelError);
+}
+
+}  // namespace
+}  // namespace paco
