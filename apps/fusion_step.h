@@ -169,7 +169,7 @@ struct ScanKnowledgeFlags {
         ("extent-head", po::value(&extent_head),
          "a hidden-extent head trained for the model (paco_train --extent-head-for), e.g. models/extent_mfcad.pt for "
          "parts cut from a cube: the hidden side is closed where it guesses the object ends (with fusion; "
-         "doc/completion.md)")
+         "doc/evaluation.md)")
         ("seen-from", po::value(&seen_from),
          "X,Y,Z: the direction towards a distant scanner (e.g. 0,0,1 for airborne LiDAR with Z up); completed "
          "points it would have seen (off the scan's silhouette, or in front of what it saw) are dropped (with fusion)")
@@ -251,13 +251,15 @@ inline HiddenExtentModel::ConstPtr loadExtentHead(const ScanKnowledge& knowledge
   return head;
 }
 
-/// --extent-head: the head's guess of how far the object reaches beyond the scan becomes the
-/// known extent of the box fill. Timed as "extent".
+/// --extent-head: the head's guess of how far the object reaches beyond the scan, averaged over
+/// the same `turns` as the network's planes, becomes the known extent of the box fill. Timed as
+/// "extent".
 inline void guessHiddenExtent(const CompletionModel::ConstPtr& model, const HiddenExtentModel& head,
                               const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                              const PlanarSegmentation& segmentation, ScanKnowledge& knowledge, StageTimer& timer) {
+                              const PlanarSegmentation& segmentation, int turns, ScanKnowledge& knowledge,
+                              StageTimer& timer) {
   timer.start("extent");
-  const HiddenExtent extent = estimateHiddenExtent(model, head, cloud, segmentation);
+  const HiddenExtent extent = estimateHiddenExtent(model, head, cloud, segmentation, turns);
   timer.stop();
   knowledge.known_extent = extent.corners();
   std::printf("hidden extent (%s): the object reaches up to %.4g beyond the scan's box (%.1f %% of its diagonal)\n",

@@ -165,7 +165,8 @@ int run(int argc, char** argv) {
 
   std::vector<paco::PlanarPrimitive> primitives =
       paco::app::completeScan(model, cloud, segmentation, o.completion.threshold, o.completion.turns, o.points, timer);
-  if (extent_head) paco::app::guessHiddenExtent(model, *extent_head, cloud, segmentation, scan_knowledge, timer);
+  if (extent_head) paco::app::guessHiddenExtent(model, *extent_head, cloud, segmentation, o.completion.turns,
+                                                   scan_knowledge, timer);
   if (!o.completion.no_fusion)
     paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.completion.fusion, scan_knowledge, timer);
   if (primitives.empty())

@@ -285,7 +285,7 @@ int run(int argc, char** argv) {
       ("extent-head-for", po::value(&o.extent_head_for),
        "instead of the network, train a hidden-extent head for this model on the datasets' samples and their "
        "stored labels (-o HEAD.pt; --epochs, --lr (default here 1e-3), --limit-train, --limit-val (default 1500), "
-       "--seed, --threads apply; doc/completion.md)")
+       "--seed, --threads apply; doc/training.md)")
       ("checkpoint-every", po::value(&o.checkpoint_every)->default_value(o.checkpoint_every),
        "also save last.pt every N steps inside an epoch (0 = only at epoch ends), so a killed run loses little")
       ("quiet", po::bool_switch(&o.quiet), "no progress bars");

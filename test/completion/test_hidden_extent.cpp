@@ -5,6 +5,7 @@
 #include <paco/common/error.h>
 #include <paco/completion/checkpoint.h>
 #include <paco/completion/hidden_extent.h>
+#include <paco/completion/turn_ensemble.h>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -179,21 +180,39 @@ TEST(HiddenExtentWithModel, AHeadFitToAScanGrowsItsBoxBackToTheWholeObject) {
   EXPECT_NEAR(largest, 2.0 / 3.0, 0.01);
   EXPECT_NEAR(others - largest, 0.0, 0.01);
 
-  // Overfit one example: the head then guesses this scan's hidden extent. (One example has no
-  // spread, so only the biases learn: a high rate gets them there.)
+  // Overfit the scan under the four turns the estimate averages over, each with its own target:
+  // the head then guesses this scan's hidden extent under every turn, and the turned guesses,
+  // mapped back side by side, agree on the whole box.
+  std::vector<ExtentExample> examples;
+  for (const Eigen::Matrix3d& turn : ensembleTurns(4)) {
+    const ExtentObservation turned = observeExtent(model, scan.cloud, scan.segmentation, turn);
+    examples.push_back({turned.features, extentBeyond(turned, scan.whole)});
+  }
+  EXPECT_NE(examples[1].beyond, examples[0].beyond);  // a half turn moves the short side
   ExtentTrainingOptions options;
-  options.epochs = 400;
+  options.epochs = 1500;
   options.hidden = 16;
-  options.learning_rate = 0.03;
-  const auto head = trainHiddenExtentModel(networkFingerprint(*model), {{observation.features, target}}, options);
-  const HiddenExtent extent = estimateHiddenExtent(model, *head, scan.cloud, scan.segmentation);
-  Eigen::AlignedBox3d guessed;
-  for (const auto& c : extent.corners()) guessed.extend(c);
-  EXPECT_NEAR(guessed.min().x(), 10.0, 0.1);
-  EXPECT_NEAR(guessed.max().x(), 14.0, 0.1);
-  EXPECT_NEAR(guessed.min().y(), -5.0, 0.1);
-  EXPECT_NEAR(guessed.max().y(), -3.0, 0.1);
-  EXPECT_NEAR(guessed.max().z(), 4.0, 0.1);
+  options.learning_rate = 0.01;
+  double last_l1 = 0.0;
+  options.after_epoch = [&](int, double l1) {
+    last_l1 = l1;
+    return true;
+  };
+  const auto head = trainHiddenExtentModel(networkFingerprint(*model), examples, options);
+  EXPECT_LT(last_l1, 0.01);
+  for (int turns : {1, 4}) {
+    SCOPED_TRACE(turns);
+    const HiddenExtent extent = estimateHiddenExtent(model, *head, scan.cloud, scan.segmentation, turns);
+    Eigen::AlignedBox3d guessed;
+    for (const auto& c : extent.corners()) guessed.extend(c);
+    EXPECT_NEAR(guessed.min().x(), 10.0, 0.1);
+    EXPECT_NEAR(guessed.max().x(), 14.0, 0.1);
+    EXPECT_NEAR(guessed.min().y(), -5.0, 0.1);
+    EXPECT_NEAR(guessed.max().y(), -3.0, 0.1);
+    EXPECT_NEAR(guessed.min().z(), 3.0, 0.1);
+    EXPECT_NEAR(guessed.max().z(), 4.0, 0.1);
+  }
+  EXPECT_THROW(estimateHiddenExtent(model, *head, scan.cloud, scan.segmentation, 0), InvalidInputError);
 
   // Another network's head is refused.
   torch::manual_seed(3);

@@ -1,6 +1,7 @@
 #include <paco/common/error.h>
 #include <paco/common/orientation.h>
 #include <paco/completion/hidden_extent.h>
+#include <paco/completion/turn_ensemble.h>
 #include <paco/encoding/model_file.h>
 #include <paco/encoding/plane_proxy_encoder.h>
 
@@ -191,7 +192,7 @@ std::uint64_t networkFingerprint(const CompletionModel& model) {
 
 ExtentObservation observeExtent(const CompletionModel::ConstPtr& model,
                                 const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                                const PlanarSegmentation& segmentation) {
+                                const PlanarSegmentation& segmentation, const Eigen::Matrix3d& turn) {
   if (!model) throw ModelError("observeExtent: no completion model");
   PlaneProxyEncoder encoder;
   encoder.setModel(model);
@@ -199,13 +200,14 @@ ExtentObservation observeExtent(const CompletionModel::ConstPtr& model,
   encoder.setSegmentation(segmentation);
   // The dominant seen planes onto the axes, as the box fill takes its box. A model trained on
   // turned inputs turns them itself.
+  encoder.setTurn(turn);
   if (model->config().input_orientation != "seen-planes") {
     std::vector<double> sizes(segmentation.planes.size(), 0.0);
     for (int label : segmentation.labels)
       if (label >= 0 && static_cast<std::size_t>(label) < sizes.size()) sizes[static_cast<std::size_t>(label)] += 1.0;
     std::vector<Eigen::Vector3d> normals;
     for (const auto& plane : segmentation.planes) normals.push_back(plane.normal);
-    encoder.setTurn(seenPlanesRotation(normals, sizes));
+    encoder.setTurn(turn * seenPlanesRotation(normals, sizes));
   }
   PlaneProxies proxies;
   encoder.encode(proxies);
@@ -266,14 +268,30 @@ double HiddenExtent::largestInUserUnits() const {
 
 HiddenExtent estimateHiddenExtent(const CompletionModel::ConstPtr& model, const HiddenExtentModel& head,
                                   const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                                  const PlanarSegmentation& segmentation) {
+                                  const PlanarSegmentation& segmentation, int turns) {
   if (!model) throw ModelError("estimateHiddenExtent: no completion model");
   head.checkMatches(*model);
-  const ExtentObservation observation = observeExtent(model, cloud, segmentation);
+  const std::vector<Eigen::Matrix3d> all_turns = ensembleTurns(turns);
   HiddenExtent extent;
-  extent.frame = observation.frame;
-  extent.seen_box = observation.seen_box;
-  extent.beyond = head.predict(observation.features);
+  for (std::size_t t = 0; t < all_turns.size(); ++t) {
+    const Eigen::Matrix3d& turn = all_turns[t];
+    const ExtentObservation observation = observeExtent(model, cloud, segmentation, turn);
+    if (t == 0) {  // the identity: the unturned frame
+      extent.frame = observation.frame;
+      extent.seen_box = observation.seen_box;
+    }
+    const auto beyond = head.predict(observation.features);
+    // Side (axis a, sign) of the turned box is the unturned box's side along turn^T e_a.
+    for (int a = 0; a < 3; ++a) {
+      const Eigen::Vector3d direction = turn.transpose().col(a);
+      int b = 0;
+      direction.cwiseAbs().maxCoeff(&b);
+      const bool flipped = direction[b] < 0.0;
+      extent.beyond[static_cast<std::size_t>(flipped ? b + 3 : b)] += beyond[static_cast<std::size_t>(a)];
+      extent.beyond[static_cast<std::size_t>(flipped ? b : b + 3)] += beyond[static_cast<std::size_t>(a + 3)];
+    }
+  }
+  for (double& b : extent.beyond) b /= static_cast<double>(all_turns.size());
   return extent;
 }
 

@@ -317,7 +317,8 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     if (!options.fuse_observed)
       throw InvalidInputError("the hidden-extent head works through the box fill of observed fusion; turn fusion on");
     guessed_extent =
-        estimateHiddenExtent(model, *cachedExtentHead(options.extent_head), in.input.makeShared(), segmentation)
+        estimateHiddenExtent(model, *cachedExtentHead(options.extent_head), in.input.makeShared(), segmentation,
+                             options.completion_frame == "own" ? options.ensemble_turns : 1)
             .corners();
   }
   out.seconds["complete"] = secondsSince(start);

@@ -10,7 +10,7 @@
 // (what the network makes of the scan) and the seen box's shape. It learns the prior of the
 // objects it was trained on: on MFCAD, whose parts are all cut from a cube, it learns to grow a
 // scan back to a cube. So it is a separate file that a user chooses for such objects, not part
-// of the general model (doc/completion.md, "The hidden extent").
+// of the general model (doc/evaluation.md, "A guessed extent"; training: doc/training.md).
 #include <paco/common/normalization.h>
 #include <paco/common/primitive.h>
 #include <paco/encoding/completion_model.h>
@@ -88,21 +88,26 @@ class HiddenExtentModel {
 std::uint64_t networkFingerprint(const CompletionModel& model);
 
 /// Runs the model's network once on the cloud turned onto its dominant seen planes (as the box
-/// fill takes its box) and returns what the head sees. Throws as PlaneProxyEncoder::encode does.
+/// fill takes its box), then by `turn` (an axis-preserving rotation, paco::ensembleTurns), and
+/// returns what the head sees. Throws as PlaneProxyEncoder::encode does.
 ExtentObservation observeExtent(const CompletionModel::ConstPtr& model,
                                 const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                                const PlanarSegmentation& segmentation);
+                                const PlanarSegmentation& segmentation,
+                                const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity());
 
 /// How far `complete` (points of the whole object, user frame) reaches beyond each side of the
 /// observation's box, in the head's frame units, 0 where it does not: the training target.
 std::array<float, kBoxSides> extentBeyond(const ExtentObservation& observation,
                                           const std::vector<Eigen::Vector3d>& complete);
 
-/// observeExtent, then the head's guess. Throws ModelError when the head was trained on another
-/// network.
+/// observeExtent, then the head's guess, averaged side by side over the first `turns` of
+/// paco::ensembleTurns (1..24; the identity and the three half turns for 4, the default), as the
+/// network's planes are (paco::completeWithTurns). The result is in the unturned frame. Throws
+/// ModelError when the head was trained on another network, InvalidInputError for turns outside
+/// 1..24.
 HiddenExtent estimateHiddenExtent(const CompletionModel::ConstPtr& model, const HiddenExtentModel& head,
                                   const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                                  const PlanarSegmentation& segmentation);
+                                  const PlanarSegmentation& segmentation, int turns = 4);
 
 /// One training example: an observation's features and its target.
 struct ExtentExample {
