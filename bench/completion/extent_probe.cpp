@@ -6,7 +6,9 @@
 // of the input's axis-aligned box, how far the GT reaches beyond it. Fits a small MLP (L1 loss)
 // from the feature and the box's shape to those six extensions, and prints the L1 against
 // predicting zero (the fill at the seen box) on 1,500 samples of DATASET_DIR's validation split
-// and on 1,200 of EVAL_DATASET_DIR's if given (doc/results.md, eighteenth session).
+// and on 1,200 of EVAL_DATASET_DIR's if given (doc/results.md, eighteenth and thirty-second
+// sessions). The head the tools use grew out of it: paco::HiddenExtentModel, trained by paco_train
+// --extent-head-for; this probe stays as the quick way to try an orientation or a dataset.
 #include <paco/completion/batch.h>
 #include <paco/completion/checkpoint.h>
 #include <paco/completion/trainer.h>
