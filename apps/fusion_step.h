@@ -167,7 +167,7 @@ struct ScanKnowledgeFlags {
          "height): where the object is known to reach, in the input's units and frame; the hidden side is closed "
          "there instead of at the scan's box (with fusion)")
         ("extent-head", po::value(&extent_head),
-         "a hidden-extent head trained for the model (paco_train --extent-head-for), e.g. models/extent_mfcad.pt for "
+         "a hidden-extent head trained for the model (paco_train --extent-head-for), e.g. models/extent/mfcad_cube.pt for "
          "parts cut from a cube: the hidden side is closed where it guesses the object ends (with fusion; "
          "doc/evaluation.md)")
         ("seen-from", po::value(&seen_from),

@@ -1,6 +1,6 @@
 #pragma once
 // Usage:
-//   auto head = paco::HiddenExtentModel::load("models/extent_mfcad.pt");    // paco_train --extent-head-for
+//   auto head = paco::HiddenExtentModel::load("models/extent/mfcad_cube.pt");    // paco_train --extent-head-for
 //   paco::HiddenExtent extent = paco::estimateHiddenExtent(model, *head, cloud, segmentation);
 //   fusion.known_extent_points = extent.corners();   // paco::fuseWithObserved's box fill reaches them
 //
