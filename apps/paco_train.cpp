@@ -83,27 +83,13 @@ int exportModel(const Options& o) {
 std::vector<paco::ExtentExample> extentExamples(const paco::CompletionModel::ConstPtr& model,
                                                 const std::vector<std::shared_ptr<const paco::data::Dataset>>& datasets,
                                                 paco::data::Split split, std::size_t limit, bool quiet) {
-  std::vector<std::pair<const paco::data::Dataset*, std::size_t>> picks;
-  std::size_t total = 0;
-  for (const auto& d : datasets) total += d->size(split);
-  const std::size_t wanted = limit == 0 ? total : std::min(limit, total);
-  // Evenly spaced over all samples, as --limit-train does for the network.
-  for (std::size_t k = 0; k < wanted; ++k) {
-    std::size_t index = k * total / wanted;
-    for (const auto& d : datasets) {
-      if (index < d->size(split)) {
-        picks.emplace_back(d.get(), index);
-        break;
-      }
-      index -= d->size(split);
-    }
-  }
+  const auto picks = paco::completion::evenlySpacedSamples(datasets, split, limit);
   std::vector<paco::ExtentExample> examples;
   std::optional<paco::ProgressBar> bar;
   if (!quiet) bar.emplace(split == paco::data::Split::Train ? "training samples" : "validation samples", picks.size());
   for (const auto& [dataset, index] : picks) {
     if (paco::interruptRequested()) return {};
-    const paco::data::Sample sample = dataset->load(split, index);
+    const paco::data::Sample sample = datasets[dataset]->load(split, index);
     const auto segmentation = paco::PlanarSegmentation::fromLabels(sample.input, sample.input_labels);
     if (!segmentation.empty()) {
       const auto observation = paco::observeExtent(model, sample.input.makeShared(), segmentation);

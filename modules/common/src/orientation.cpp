@@ -100,4 +100,13 @@ Eigen::Matrix3d seenPlanesRotation(const std::vector<Eigen::Vector3d>& normals, 
   return axes ? rotationOntoAxesClosestToIdentity(*axes) : Eigen::Matrix3d::Identity();
 }
 
+Eigen::Matrix3d seenPlanesRotation(const PlanarSegmentation& segmentation) {
+  std::vector<double> sizes(segmentation.planes.size(), 0.0);
+  for (int label : segmentation.labels)
+    if (label >= 0 && static_cast<std::size_t>(label) < sizes.size()) sizes[static_cast<std::size_t>(label)] += 1.0;
+  std::vector<Eigen::Vector3d> normals;
+  for (const auto& plane : segmentation.planes) normals.push_back(plane.normal);
+  return seenPlanesRotation(normals, sizes);
+}
+
 }  // namespace paco

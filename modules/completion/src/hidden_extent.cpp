@@ -14,7 +14,6 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
-#include <unistd.h>
 
 namespace paco {
 namespace {
@@ -117,21 +116,7 @@ void HiddenExtentModel::save(const std::string& path) const {
   torch::serialize::OutputArchive mlp;
   impl_->mlp->save(mlp);
   root.write("mlp", mlp);
-  // Beside the target, then renamed: an interrupted write never leaves a truncated head.
-  const std::string temporary = path + ".partial." + std::to_string(::getpid());
-  try {
-    root.save_to(temporary);
-  } catch (const c10::Error& e) {
-    std::error_code ec;
-    std::filesystem::remove(temporary, ec);
-    throw IoError("cannot write the hidden-extent head '" + path + "': " + e.what_without_backtrace());
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) {
-    std::filesystem::remove(temporary, ec);
-    throw IoError("cannot write the hidden-extent head '" + path + "': " + ec.message());
-  }
+  saveArchiveAtomically(root, path, "hidden-extent head");
 }
 
 HiddenExtentModel::ConstPtr HiddenExtentModel::load(const std::string& path) {
@@ -200,15 +185,8 @@ ExtentObservation observeExtent(const CompletionModel::ConstPtr& model,
   encoder.setSegmentation(segmentation);
   // The dominant seen planes onto the axes, as the box fill takes its box. A model trained on
   // turned inputs turns them itself.
-  encoder.setTurn(turn);
-  if (model->config().input_orientation != "seen-planes") {
-    std::vector<double> sizes(segmentation.planes.size(), 0.0);
-    for (int label : segmentation.labels)
-      if (label >= 0 && static_cast<std::size_t>(label) < sizes.size()) sizes[static_cast<std::size_t>(label)] += 1.0;
-    std::vector<Eigen::Vector3d> normals;
-    for (const auto& plane : segmentation.planes) normals.push_back(plane.normal);
-    encoder.setTurn(turn * seenPlanesRotation(normals, sizes));
-  }
+  encoder.setTurn(model->config().input_orientation == "seen-planes" ? turn
+                                                                     : Eigen::Matrix3d(turn * seenPlanesRotation(segmentation)));
   PlaneProxies proxies;
   encoder.encode(proxies);
   const PlaneProxyOutput in = detail::decoderInputOf(proxies);

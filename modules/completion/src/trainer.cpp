@@ -498,8 +498,9 @@ BatchSource datasetSource(std::shared_ptr<const paco::data::Dataset> dataset, pa
                        limit);
 }
 
-BatchSource datasetSource(std::vector<std::shared_ptr<const paco::data::Dataset>> datasets, paco::data::Split split,
-                          const CollateOptions& options, std::size_t limit) {
+std::vector<std::pair<std::size_t, std::size_t>> evenlySpacedSamples(
+    const std::vector<std::shared_ptr<const paco::data::Dataset>>& datasets, paco::data::Split split,
+    std::size_t limit) {
   // (dataset, sample) of each position of the concatenation.
   std::vector<std::pair<std::size_t, std::size_t>> all;
   for (std::size_t d = 0; d < datasets.size(); ++d) {
@@ -508,11 +509,16 @@ BatchSource datasetSource(std::vector<std::shared_ptr<const paco::data::Dataset>
   }
   const std::size_t total = all.size();
   const std::size_t count = limit > 0 ? std::min(limit, total) : total;
-  // A limited source takes evenly spaced samples, so it still covers many parts.
   std::vector<std::pair<std::size_t, std::size_t>> chosen(count);
   for (std::size_t i = 0; i < count; ++i) chosen[i] = all[count == total ? i : i * total / count];
+  return chosen;
+}
+
+BatchSource datasetSource(std::vector<std::shared_ptr<const paco::data::Dataset>> datasets, paco::data::Split split,
+                          const CollateOptions& options, std::size_t limit) {
+  std::vector<std::pair<std::size_t, std::size_t>> chosen = evenlySpacedSamples(datasets, split, limit);
   BatchSource source;
-  source.size = count;
+  source.size = chosen.size();
   source.load = [datasets = std::move(datasets), split, options, chosen = std::move(chosen)](
                     const std::vector<std::size_t>& indices, std::uint64_t seed) {
     std::vector<paco::data::Sample> samples;

@@ -142,21 +142,25 @@ void writeModelFile(const std::string& path, const ModelConfig& config,
   if (!checksums.empty()) root.write("weight_checksums", c10::IValue(checksumsText(checksums)));
   root.write("model", model);
   if (training_state) root.write("training_state", *training_state);
-  // Write beside the target and rename, so a crash or Ctrl-C never leaves a truncated model.
+  saveArchiveAtomically(root, path, "model file");
+}
+
+void saveArchiveAtomically(torch::serialize::OutputArchive& archive, const std::string& path, const std::string& what) {
+  // Write beside the target and rename, so a crash or Ctrl-C never leaves a truncated file.
   const std::string temporary = path + ".partial." + std::to_string(::getpid());
   try {
-    root.save_to(temporary);
+    archive.save_to(temporary);
   } catch (const c10::Error& e) {
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);
-    throw IoError("cannot write model file " + quoted(path) + ": " + firstLine(e) +
+    throw IoError("cannot write " + what + " " + quoted(path) + ": " + firstLine(e) +
                   " (check that the folder exists and is writable)");
   }
   std::error_code ec;
   std::filesystem::rename(temporary, path, ec);
   if (ec) {
     std::filesystem::remove(temporary, ec);
-    throw IoError("cannot write model file " + quoted(path) + ": " + ec.message());
+    throw IoError("cannot write " + what + " " + quoted(path) + ": " + ec.message());
   }
 }
 

@@ -53,12 +53,7 @@ Normalization PlaneProxyEncoder::ownFrame() const {
   }
   // The segments' planes weighted by their point counts, as paco::completion::collate does
   // in training (there the planes come from the points' normals).
-  std::vector<double> sizes(segmentation_.planes.size(), 0.0);
-  for (int label : segmentation_.labels)
-    if (label >= 0) sizes[static_cast<std::size_t>(label)] += 1.0;
-  std::vector<Eigen::Vector3d> normals;
-  for (const auto& plane : segmentation_.planes) normals.push_back(plane.normal);
-  return Normalization::fromBoundingBox(*cloud_, turn_ * seenPlanesRotation(normals, sizes));
+  return Normalization::fromBoundingBox(*cloud_, turn_ * seenPlanesRotation(segmentation_));
 }
 
 void PlaneProxyEncoder::computeProxies(PlaneProxies& proxies) {

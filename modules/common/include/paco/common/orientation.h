@@ -8,6 +8,8 @@
 // Piecewise-planar objects (CAD parts, buildings, rooms) are built around a few orthogonal
 // directions. Turning a scan so that its dominant seen faces lie on the coordinate axes gives
 // the network one orientation to learn instead of all of them, whatever the scan's frame.
+#include <paco/common/primitive.h>
+
 #include <Eigen/Core>
 
 #include <optional>
@@ -35,5 +37,9 @@ Eigen::Matrix3d rotationOntoAxesClosestToIdentity(const Eigen::Matrix3d& axes);
 /// rotationOntoAxesClosestToIdentity(dominantPlaneAxes(...)), or the identity when no plane
 /// counts. Throws InvalidInputError when the two lists differ in length.
 Eigen::Matrix3d seenPlanesRotation(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights);
+
+/// The same for a segmentation: each segment's plane normal weighted by its number of points (the
+/// turn PlaneProxyEncoder gives a "seen-planes" model, and the hidden-extent head's frame).
+Eigen::Matrix3d seenPlanesRotation(const PlanarSegmentation& segmentation);
 
 }  // namespace paco

@@ -162,6 +162,13 @@ std::vector<std::size_t> epochOrder(std::size_t n, std::uint64_t seed, int epoch
 /// should pass augmentation-free options.
 BatchSource datasetSource(std::shared_ptr<const paco::data::Dataset> dataset, paco::data::Split split,
                           const CollateOptions& options, std::size_t limit = 0);
+/// The (dataset, sample) indices a source over one split of `datasets` uses: every sample, one
+/// dataset after another, or `limit` (> 0) of them evenly spaced over the whole, so that they
+/// still cover many parts and each dataset keeps its share. Throws InvalidInputError for a null
+/// dataset.
+std::vector<std::pair<std::size_t, std::size_t>> evenlySpacedSamples(
+    const std::vector<std::shared_ptr<const paco::data::Dataset>>& datasets, paco::data::Split split,
+    std::size_t limit = 0);
 /// A BatchSource over one split of several datasets, one after another (e.g. inputs cut by
 /// distance and inputs seen by one scanner, to train one model on both). A limit takes evenly
 /// spaced samples of the whole, so each dataset keeps its share.

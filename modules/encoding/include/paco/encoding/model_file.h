@@ -47,6 +47,11 @@ void writeModelFile(const std::string& path, const ModelConfig& config,
                     torch::serialize::OutputArchive* training_state = nullptr,
                     const WeightChecksums& checksums = {});
 
+/// Saves `archive` to `path` atomically: beside it first, then renamed, so that a crash or Ctrl-C
+/// never leaves a truncated file. IoError ("cannot write <what> '<path>': ...") on failure.
+/// writeModelFile and the hidden-extent head (paco::HiddenExtentModel::save) write through it.
+void saveArchiveAtomically(torch::serialize::OutputArchive& archive, const std::string& path, const std::string& what);
+
 /// Loads `module`'s parameters and buffers from `archive`; converts LibTorch's errors (missing
 /// or mis-shaped tensors) to paco::ModelError mentioning `file.path` and `what` (e.g.
 /// "encoder"). When the file stores weight checksums, every tensor must match its own, named
