@@ -146,8 +146,8 @@ TEST(Orientation, LeavesAnAxisAlignedScanAsItIs) {
 
 TEST(Orientation, AChamferLargerThanEveryFaceDoesNotSetTheAxes) {
   // A box turned by R0 and seen with a 45-degree chamfer that is its largest seen plane: the
-  // box's three faces outweigh it and the face perpendicular to it (830 against 700), so they
-  // set the axes.
+  // box's three faces outweigh it and the face perpendicular to it (square roots of the weights:
+  // 49.9 against 37.3), so they set the axes.
   const Eigen::Matrix3d R0 = turn(17.0, Eigen::Vector3d(1, 2, -0.5));
   const std::vector<Eigen::Vector3d> normals = {R0 * Eigen::Vector3d(0, -1, -1), R0 * Eigen::Vector3d(-1, 0, 0),
                                                 R0 * Eigen::Vector3d(0, -1, 0), R0 * Eigen::Vector3d(0, 0, -1)};
@@ -160,6 +160,37 @@ TEST(Orientation, AChamferLargerThanEveryFaceDoesNotSetTheAxes) {
   const auto chamfer = paco::dominantPlaneAxes({normals[0], normals[1]}, {400, 300});
   ASSERT_TRUE(chamfer.has_value());
   EXPECT_NEAR((chamfer->transpose() * normals[0].normalized()).cwiseAbs().maxCoeff(), 1.0, 1e-9);
+}
+
+TEST(Orientation, ManyFacesOnThePartsAxesOutweighALargeChamferAndItsPerpendicularFaces) {
+  // The segments of MFCAD part 0-13-13-14-14-23 at 75 % missing, view 0 (sizes in points): faces
+  // on x, y and z, a large chamfer about z, a smaller slanted face, and the faces on z, which are
+  // perpendicular to the chamfer too. By plain weight the chamfer's frame wins (626 + 708 against
+  // 1,227); by the sum of square roots, the part's axes do (91.6 against 66.8).
+  const std::vector<Eigen::Vector3d> normals = {
+      {-1, 0, 0}, {-1, 0, 0}, {0, 0, -1}, {-0.55278605, -0.8333232, 0}, {0, -1, 0},
+      {0, 0, -1}, {-0.39831138, 0.9172503, 0}, {1, 0, 0}, {0, -1, 0}, {0, 0, 1}};
+  const std::vector<double> sizes = {113, 175, 533, 626, 60, 102, 99, 60, 111, 73};
+  EXPECT_TRUE(paco::seenPlanesRotation(normals, sizes).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+  // The chamfer and the faces perpendicular to it alone do set their frame.
+  const std::vector<Eigen::Vector3d> chamfer_frame = {normals[3], normals[2], normals[5], normals[9]};
+  const auto axes = paco::dominantPlaneAxes(chamfer_frame, {626, 533, 102, 73});
+  ASSERT_TRUE(axes.has_value());
+  EXPECT_NEAR((axes->transpose() * normals[3].normalized()).cwiseAbs().maxCoeff(), 1.0, 1e-9);
+}
+
+TEST(Orientation, AFrameTurnedOntoASlightlySlantedFaceLosesToThePartsOwnAxes) {
+  // The segments of MFCAD part 1-4-7-11-13-23 at 25 % missing, view 0: faces on the axes, and a
+  // face 7.4 degrees off x. A frame with that face on its axis keeps every face of the axes within
+  // the 10-degree tolerance; counted in full they made it win. Counted by their closeness, the
+  // part's own axes win.
+  const std::vector<Eigen::Vector3d> normals = {
+      {0, 1, 0}, {0, -1, 0}, {0.99165845, -1.1677856e-05, 0.12889342}, {0, 0, -1},
+      {-0.76312727, 0, -0.6462482}, {-0.20311335, 0, 0.97915524}, {1, 0, 0}, {-1, 0, 0}, {0, 0, 1},
+      {-0.7745461, -0.63251746, 0}, {0, 1, 0}, {0.8714375, 0, -0.4905066}, {-1, 0, 0},
+      {0, 0.9737533, -0.22760604}, {-0.77454484, 0.632519, 0}};
+  const std::vector<double> sizes = {63, 373, 108, 308, 59, 80, 69, 125, 158, 124, 60, 71, 62, 100, 116};
+  EXPECT_TRUE(paco::seenPlanesRotation(normals, sizes).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
 }
 
 TEST(Orientation, ALargePlaneWithoutAPerpendicularPartnerOutweighsASmallPair) {

@@ -19,8 +19,9 @@ namespace paco {
 
 /// Orthonormal axes (the columns, a proper rotation) of the dominant planes. Each pair of planes
 /// within `tolerance_degrees` of perpendicular spans a frame: the heavier one's normal, the other
-/// made exactly perpendicular, their cross product. The frame whose axes the largest total weight
-/// of planes lies on (within the tolerance) wins; on ties, the pair of heavier planes. One more
+/// made exactly perpendicular, their cross product. The frame with the largest support wins; on
+/// ties, the pair of heavier planes. A plane within the tolerance of an axis supports the frame by
+/// the square root of its weight times its closeness (1 on the axis, 0 at the tolerance). One more
 /// frame competes (and is the only one when no two planes are perpendicular): the largest
 /// plane's normal and the coordinate axis least aligned with it, made perpendicular. Normals need
 /// not be unit or consistently oriented; planes with a zero or non-finite normal or a weight <= 0
