@@ -302,11 +302,8 @@ TEST(Preprocessing, MergesNearDuplicatePlanesAndDropsWeakPrimitives) {
   EXPECT_EQ(countPlanarRegions(mesh), 6u);
 }
 
-TEST(PolyFit, CandidateFaceBudgetLeavesOutTheLeastConfidentPrimitives) {
-  // An observed box (confidence 1) and eight predicted patches through it, confidence rising
-  // from 0.55 to 0.9.
-  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
-  const std::size_t box_planes = primitives.size();
+// Eight predicted patches through the box [0,1]x[0,0.8]x[0,0.6], confidence rising from 0.55 to 0.9.
+void addPredictedPatchesThroughTheBox(std::vector<PlanarPrimitive>& primitives) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   for (int k = 0; k < 8; ++k) {
@@ -317,20 +314,29 @@ TEST(PolyFit, CandidateFaceBudgetLeavesOutTheLeastConfidentPrimitives) {
     patch.confidence = 0.55f + 0.05f * static_cast<float>(k);
     primitives.push_back(patch);
   }
-  auto assemble = [&](std::size_t budget, SurfaceMesh& mesh) {
-    paco::PolygonalAssembler assembler;
-    assembler.setMaxCandidateFaces(budget);
-    assembler.setTimeLimit(60);
-    assembler.setInputPrimitives(primitives);
-    return assembler.reconstruct(mesh);
-  };
+}
+
+paco::AssemblyResult assembleWithBudget(const std::vector<PlanarPrimitive>& primitives, std::size_t budget,
+                                        SurfaceMesh& mesh) {
+  paco::PolygonalAssembler assembler;
+  assembler.setMaxCandidateFaces(budget);
+  assembler.setTimeLimit(60);
+  assembler.setInputPrimitives(primitives);
+  return assembler.reconstruct(mesh);
+}
+
+TEST(PolyFit, CandidateFaceBudgetLeavesOutTheLeastConfidentPrimitives) {
+  // An observed box (confidence 1) and eight predicted patches through it.
+  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
+  const std::size_t box_planes = primitives.size();
+  addPredictedPatchesThroughTheBox(primitives);
   SurfaceMesh unlimited_mesh;
-  const std::size_t unlimited = assemble(0, unlimited_mesh).num_candidate_faces;
+  const std::size_t unlimited = assembleWithBudget(primitives, 0, unlimited_mesh).num_candidate_faces;
   ASSERT_GT(unlimited, 0u);
 
   const std::size_t budget = unlimited / 3;
   SurfaceMesh mesh;
-  const paco::AssemblyResult result = assemble(budget, mesh);
+  const paco::AssemblyResult result = assembleWithBudget(primitives, budget, mesh);
   ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
   EXPECT_LE(result.num_candidate_faces, budget);
   EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
@@ -348,6 +354,46 @@ TEST(PolyFit, CandidateFaceBudgetLeavesOutTheLeastConfidentPrimitives) {
       EXPECT_NE(result.fates[k].reason.find("candidate faces"), std::string::npos);
     }
   }
+}
+
+TEST(PolyFit, CandidateFaceBudgetNeverLeavesOutAPlaneOfTheHull) {
+  // A box whose +x face is the least confident primitive of all (a guessed side, as the box fill
+  // of a guessed extent adds), and eight predicted patches through it. Leaving that face out would
+  // open the box at +x, and PolyFit would close it at a patch inside, cutting off a slab: the
+  // budget leaves out only patches, and the mesh still reaches x = 1.
+  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
+  std::size_t plus_x = primitives.size();
+  for (std::size_t k = 0; k < primitives.size(); ++k)
+    if (primitives[k].plane.normal.x() > 0.99) plus_x = k;
+  ASSERT_LT(plus_x, primitives.size());
+  primitives[plus_x].confidence = 0.5f;
+  const std::size_t box_planes = primitives.size();
+  addPredictedPatchesThroughTheBox(primitives);
+  SurfaceMesh unlimited_mesh;
+  const std::size_t unlimited = assembleWithBudget(primitives, 0, unlimited_mesh).num_candidate_faces;
+  ASSERT_GT(unlimited, 0u);
+  SurfaceMesh mesh;
+  const paco::AssemblyResult result = assembleWithBudget(primitives, unlimited / 3, mesh);
+  ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  EXPECT_NE(result.fates[plus_x].kind, paco::PrimitiveFate::Dropped);
+  std::size_t dropped = 0;
+  for (std::size_t k = box_planes; k < primitives.size(); ++k) dropped += result.fates[k].kind == paco::PrimitiveFate::Dropped;
+  EXPECT_GE(dropped, 1u);
+  EXPECT_EQ(result.num_dropped, dropped);
+  double max_x = -1.0;
+  for (const Eigen::Vector3d& v : mesh.vertices) max_x = std::max(max_x, v.x());
+  EXPECT_NEAR(max_x, 1.0, 1e-3);
+
+  // Only the box, every face but +x observed: nothing may go, and the candidates stay over a
+  // budget they cannot fit.
+  primitives.resize(box_planes);
+  SurfaceMesh box_mesh;
+  const paco::AssemblyResult box_result = assembleWithBudget(primitives, 3, box_mesh);
+  ASSERT_TRUE(box_result.ok()) << paco::toString(box_result.status) << ": " << box_result.message;
+  EXPECT_EQ(box_result.num_dropped, 0u);
+  EXPECT_GT(box_result.num_candidate_faces, 3u);
+  EXPECT_EQ(countPlanarRegions(box_mesh), 6u);
 }
 
 TEST(PolyFit, WarmStartIsTheCellComplexSurfaceAndKeepsTheOptimum) {

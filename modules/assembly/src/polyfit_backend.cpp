@@ -166,6 +166,37 @@ std::size_t releaseFacesAtForbiddenEdges(const CgalMesh& candidates, std::vector
   return count;
 }
 
+// A plane bounds the hull when its far side holds at most 1 % of the points farther than 1 % of
+// their box's diagonal (about twice a segment's inlier distance on MFCAD scans).
+constexpr double kHullTolerance = 0.01;
+constexpr double kHullStrayFraction = 0.01;
+
+// Which primitives bound the hull of all the primitives' points: their plane has (nearly) every
+// point on one side. Leaving such a plane out opens the solid on that side, and PolyFit closes it
+// at the next plane inward, cutting off the slab between: far worse than losing an interior plane.
+// `tolerance` is a distance; up to `stray_fraction` of the points may lie beyond it on the other
+// side (a guess's scattered points, a few outliers).
+std::vector<bool> hullFaces(const std::vector<PlanarPrimitive>& primitives, double tolerance, double stray_fraction) {
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& primitive : primitives)
+    for (const auto& p : primitive.points) points.emplace_back(p.x, p.y, p.z);
+  const auto strays_allowed = static_cast<std::size_t>(stray_fraction * static_cast<double>(points.size()));
+  std::vector<bool> hull(primitives.size(), false);
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    const Plane& plane = primitives[k].plane;
+    const double norm = plane.normal.norm();
+    if (!(norm > 0.0)) continue;
+    std::size_t above = 0, below = 0;
+    for (const auto& x : points) {
+      const double distance = (plane.normal.dot(x) + plane.offset) / norm;  // a normal set by hand need not be unit
+      above += distance > tolerance ? 1 : 0;
+      below += distance < -tolerance ? 1 : 0;
+    }
+    hull[k] = std::min(above, below) <= strays_allowed;
+  }
+  return hull;
+}
+
 }  // namespace
 
 BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const PolyFitOptions& options,
@@ -203,10 +234,19 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
       countCandidates(*reconstruction) > options.max_candidate_faces) {
     // Leave out the k least confident predicted primitives (observed ones have confidence 1),
     // with the smallest k that fits the budget, found by bisection (fewer planes give fewer
-    // candidates, if not strictly). At least 4 planes stay.
+    // candidates, if not strictly). At least 4 planes stay, and no plane of the hull: when only
+    // those are left, the candidates stay over the budget (the solver's time limit still holds).
+    double diagonal = 0.0;
+    {
+      Eigen::AlignedBox3d box;
+      for (const auto& primitive : primitives)
+        for (const auto& p : primitive.points) box.extend(Eigen::Vector3d(p.x, p.y, p.z));
+      if (!box.isEmpty()) diagonal = box.diagonal().norm();
+    }
+    const std::vector<bool> on_hull = hullFaces(primitives, kHullTolerance * diagonal, kHullStrayFraction);
     std::vector<std::size_t> droppable;
     for (std::size_t k = 0; k < primitives.size(); ++k)
-      if (primitives[k].confidence < 1.0f) droppable.push_back(k);
+      if (primitives[k].confidence < 1.0f && !on_hull[k]) droppable.push_back(k);
     std::stable_sort(droppable.begin(), droppable.end(), [&](std::size_t a, std::size_t b) {
       return primitives[a].confidence < primitives[b].confidence;
     });
