@@ -486,7 +486,7 @@ TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
   ObservedFusionReport report;
   const auto fused = fuseWithObserved({}, observed, options, &report);
   EXPECT_GT(report.fill_in_seen_free_space, 0u);
-  EXPECT_NE(describe(report).find("in space the scan shows empty"), std::string::npos) << describe(report);
+  EXPECT_NE(describe(report).find("in space the seen faces show empty"), std::string::npos) << describe(report);
   std::size_t top_points = 0, side_points = 0;
   for (const auto& primitive : fused) {
     if (primitive.plane.normal.isApprox(Eigen::Vector3d(0, 0, 1), 1e-9) &&
@@ -503,7 +503,7 @@ TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
   // and 12 x 6 grid points, less the rows near seen points.
   EXPECT_GT(top_points, 30u);
   EXPECT_GT(side_points, 30u);
-  // Without the floor, no box point is in space the scan shows empty.
+  // Without the floor, no box point is in space the seen faces show empty.
   EXPECT_FALSE(fuseWithObserved({}, seenBottomAndSide(), options, &report).empty());
   EXPECT_EQ(report.fill_in_seen_free_space, 0u);
   // With a zero empty radius every grid point is uncovered and no line meets a seen point.
@@ -511,6 +511,37 @@ TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
   EXPECT_FALSE(fuseWithObserved({}, observed, options, &report).empty());
   EXPECT_EQ(report.fill_in_seen_free_space, 0u);
   EXPECT_GT(report.filled_points, 0u);
+}
+
+TEST(ObservedFusion, TheNetworksPointsOfASeenFaceShowFreeSpaceWhereTheScanMissedIt) {
+  // As above, but the scan saw the step's floor (z = 0.5, facing up, x in [0.5, 0.95]) only over
+  // y < 0.5. The network predicts the whole floor, in two halves. Its points over y > 0.5 show the
+  // space above them empty too: the top face z = 0.9375 is filled only over x < 0.5.
+  std::vector<PlanarPrimitive> observed = seenBottomAndSide();
+  const Plane floor = Plane::fromPointAndNormal({0, 0, 0.5}, {0, 0, 1});
+  observed.push_back(patch(floor, {0.725, 0.275, 0.5}, 0.45, 6, 1.0f));
+  const std::vector<PlanarPrimitive> completed = {patch(floor, {0.725, 0.275, 0.5}, 0.45, 6, 0.8f),
+                                                  patch(floor, {0.725, 0.725, 0.5}, 0.45, 6, 0.8f)};
+  ObservedFusionOptions options;
+  options.fill_spacing = 0.05;
+  options.fill_empty_radius = 0.05;
+  const auto topPointsBeyond = [](const std::vector<PlanarPrimitive>& fused, double x) {
+    std::size_t count = 0;
+    for (const auto& primitive : fused)
+      if (primitive.plane.normal.isApprox(Eigen::Vector3d(0, 0, 1), 1e-9) &&
+          std::abs(primitive.plane.signedDistance({0, 0, 0.9375})) < 1e-9)
+        for (const auto& p : primitive.points) count += p.x >= x ? 1 : 0;
+    return count;
+  };
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  EXPECT_EQ(report.snapped, 1u);
+  EXPECT_EQ(report.absorbed, 1u);
+  EXPECT_EQ(report.contradicted_points, 0u);
+  EXPECT_EQ(topPointsBeyond(fused, 0.5), 0u);
+  EXPECT_GT(topPointsBeyond(fused, 0.0), 30u);  // the top over x < 0.5 is still filled
+  // With the scan alone, the top over the unseen half of the floor is filled.
+  EXPECT_GT(topPointsBeyond(fuseWithObserved({}, observed, options), 0.5), 10u);
 }
 
 TEST(ObservedFusion, AnUnseenGuessOfABoxFaceTakesTheFaceAndOutranksTheOtherGuesses) {

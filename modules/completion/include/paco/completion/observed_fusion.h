@@ -59,8 +59,9 @@ struct ObservedFusionOptions {
   /// face narrower than four times that but wider than `max_distance`, a quarter of its width, so
   /// that the rim of a thin plate is not covered by the points of its two sides) from every
   /// fused point and outside the
-  /// space the scan shows empty (in front of a seen surface, looking along a box axis: over a
-  /// seen step, notch or chamfer the part's boundary is that surface, not the box face). Each
+  /// space the seen faces show empty (in front of a seen face, looking along a box axis: over a
+  /// seen step, notch or chamfer the part's boundary is that surface, not the box face; a seen
+  /// face's points are the scan's and the network's that the scan does not contradict). Each
   /// face's points join a fused primitive on (nearly) the face's plane, or become a new
   /// primitive (confidence 0.99). An unseen primitive that hosts them takes the face's plane
   /// and confidence 0.99 too.
@@ -141,7 +142,7 @@ struct ObservedFusionReport {
   std::size_t filled_points = 0;   ///< box-face points added where nothing covered the box
   std::size_t filled_faces = 0;    ///< box faces added as new primitives (the rest joined one)
   std::size_t box_faces_taken = 0; ///< unseen completed primitives that hosted box-face points and took the face's plane
-  std::size_t fill_in_seen_free_space = 0;  ///< uncovered box-face points left out: the scan shows them in empty space
+  std::size_t fill_in_seen_free_space = 0;  ///< uncovered box-face points left out: the seen faces show them in empty space
   /// Points of the two box faces added across the one axis every fused plane was parallel to (the
   /// ends of a profile; see ObservedFusionOptions::fill_spacing)
   std::size_t profile_cap_points = 0;
