@@ -193,6 +193,13 @@ TEST(Orientation, AFrameTurnedOntoASlightlySlantedFaceLosesToThePartsOwnAxes) {
   EXPECT_TRUE(paco::seenPlanesRotation(normals, sizes).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
 }
 
+TEST(Orientation, AZeroToleranceCountsThePlanesExactlyOnTheAxes) {
+  // Two perpendicular planes (square roots 9 + 9) outweigh a larger plane off their axes (10).
+  const auto axes = paco::dominantPlaneAxes({{1, 1, 1}, {1, 0, 0}, {0, 1, 0}}, {100, 81, 81}, 0.0);
+  ASSERT_TRUE(axes.has_value());
+  EXPECT_TRUE(axes->isApprox(Eigen::Matrix3d::Identity(), 1e-12)) << *axes;
+}
+
 TEST(Orientation, ALargePlaneWithoutAPerpendicularPartnerOutweighsASmallPair) {
   // Two small perpendicular planes, and a large one perpendicular to neither: the large plane's
   // frame carries more weight than the pair's, which leaves it off its axes.

@@ -56,7 +56,8 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
     for (std::size_t k = 0; k < unit.size(); ++k) {
       const double cosine = (axes.transpose() * unit[k]).cwiseAbs().maxCoeff();
       if (cosine < min_cosine) continue;
-      const double closeness = 1.0 - std::acos(std::min(1.0, cosine)) / radians;
+      // A zero tolerance takes only planes exactly on an axis, in full.
+      const double closeness = radians > 0.0 ? 1.0 - std::acos(std::min(1.0, cosine)) / radians : 1.0;
       total += std::sqrt(weights[order[k]]) * closeness;
     }
     return total;
