@@ -172,15 +172,16 @@ constexpr double kHullTolerance = 0.01;
 constexpr double kHullStrayFraction = 0.01;
 
 // Which primitives bound the hull of all the primitives' points: their plane has (nearly) every
-// point on one side. Leaving such a plane out opens the solid on that side, and PolyFit closes it
-// at the next plane inward, cutting off the slab between: far worse than losing an interior plane.
-// `tolerance` is a distance; up to `stray_fraction` of the points may lie beyond it on the other
-// side (a guess's scattered points, a few outliers).
-std::vector<bool> hullFaces(const std::vector<PlanarPrimitive>& primitives, double tolerance, double stray_fraction) {
+// point on one side (kHullTolerance, kHullStrayFraction: a guess's scattered points, a few
+// outliers). Leaving such a plane out opens the solid on that side, and PolyFit closes it at the
+// next plane inward, cutting off the slab between: far worse than losing an interior plane.
+std::vector<bool> hullFaces(const std::vector<PlanarPrimitive>& primitives) {
   std::vector<Eigen::Vector3d> points;
+  Eigen::AlignedBox3d box;
   for (const auto& primitive : primitives)
-    for (const auto& p : primitive.points) points.emplace_back(p.x, p.y, p.z);
-  const auto strays_allowed = static_cast<std::size_t>(stray_fraction * static_cast<double>(points.size()));
+    for (const auto& p : primitive.points) box.extend(points.emplace_back(p.x, p.y, p.z));
+  const double tolerance = box.isEmpty() ? 0.0 : kHullTolerance * box.diagonal().norm();
+  const auto strays_allowed = static_cast<std::size_t>(kHullStrayFraction * static_cast<double>(points.size()));
   std::vector<bool> hull(primitives.size(), false);
   for (std::size_t k = 0; k < primitives.size(); ++k) {
     const Plane& plane = primitives[k].plane;
@@ -236,14 +237,7 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
     // with the smallest k that fits the budget, found by bisection (fewer planes give fewer
     // candidates, if not strictly). At least 4 planes stay, and no plane of the hull: when only
     // those are left, the candidates stay over the budget (the solver's time limit still holds).
-    double diagonal = 0.0;
-    {
-      Eigen::AlignedBox3d box;
-      for (const auto& primitive : primitives)
-        for (const auto& p : primitive.points) box.extend(Eigen::Vector3d(p.x, p.y, p.z));
-      if (!box.isEmpty()) diagonal = box.diagonal().norm();
-    }
-    const std::vector<bool> on_hull = hullFaces(primitives, kHullTolerance * diagonal, kHullStrayFraction);
+    const std::vector<bool> on_hull = hullFaces(primitives);
     std::vector<std::size_t> droppable;
     for (std::size_t k = 0; k < primitives.size(); ++k)
       if (primitives[k].confidence < 1.0f && !on_hull[k]) droppable.push_back(k);
