@@ -239,7 +239,7 @@ int dataset(const Options& o) {
   for (int view : b.views)
     if (view < 0) throw paco::app::UsageError("--views takes view indices >= 0, got " + std::to_string(view));
   if (o.segment_min_points != 0 && o.segment_min_points < 3)
-    throw paco::app::UsageError("--min-points must be 0 (1.5 % of the input's points) or at least 3, got " +
+    throw paco::app::UsageError("--min-points must be 0 (1 % of the input's points) or at least 3, got " +
                                 std::to_string(o.segment_min_points));
   b.limit = o.limit;
   paco::app::validateThreads("--jobs", o.jobs);
@@ -345,7 +345,7 @@ int run(int argc, char** argv) {
       ("complexity", po::value(&o.complexity)->default_value(o.complexity, paco::app::shortNumber(o.complexity)),
        "polyfit complexity weight (>= 0)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco")
-      ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the input's points, at least 3)")
+      ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1 % of the input's points, at least 3)")
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
        "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the input's points; -1: none)")
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")

@@ -23,12 +23,12 @@ inline void addMaxPointsOption(boost::program_options::options_description& opti
 
 inline void addMinPointsOption(boost::program_options::options_description& options, int& min_points) {
   options.add_options()("min-points", boost::program_options::value(&min_points)->default_value(min_points),
-                        "segmenter: fewest points of a plane, >= 3 (0: 1.5 % of the working cloud's points, at least 3)");
+                        "segmenter: fewest points of a plane, >= 3 (0: 1 % of the working cloud's points, at least 3)");
 }
 
 inline void validateMinPoints(int min_points) {
   if (min_points != 0 && min_points < 3)
-    throw UsageError("--min-points must be 0 (1.5 % of the points) or at least 3, got " + std::to_string(min_points));
+    throw UsageError("--min-points must be 0 (1 % of the points) or at least 3, got " + std::to_string(min_points));
 }
 
 inline void addMinParallelPointsOption(boost::program_options::options_description& options, int& min_points) {

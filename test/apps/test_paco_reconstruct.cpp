@@ -630,7 +630,7 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --max-points 100", &log), 2) << log;
   EXPECT_NE(log.find("--max-points must be 0 (keep all) or at least 256"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-points 2", &log), 2) << log;
-  EXPECT_NE(log.find("--min-points must be 0 (1.5 % of the points) or at least 3, got 2"), std::string::npos) << log;
+  EXPECT_NE(log.find("--min-points must be 0 (1 % of the points) or at least 3, got 2"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-parallel-points 2", &log), 2)
       << log;
   EXPECT_NE(log.find("--min-parallel-points must be -1 (none), 0 (0.5 % of the points) or at least 3, got 2"),

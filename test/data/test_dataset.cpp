@@ -128,7 +128,7 @@ TEST(DatasetBuild, SegmentMinimumsAreTheSmallestSegmentsAndZeroMeansTheToolsShar
 
   options.info.segment_min_points = 300;
   const PartSamples coarse = buildPart("p", part, options);
-  options.info.segment_min_points = 0;  // 1.5 % of 1024 points: 15
+  options.info.segment_min_points = 0;  // 1 % of 1024 points: 10
   const PartSamples fine = buildPart("p", part, options);
   ASSERT_EQ(coarse.samples.size(), fine.samples.size());
   std::size_t coarse_segments = 0, fine_segments = 0;
@@ -136,7 +136,7 @@ TEST(DatasetBuild, SegmentMinimumsAreTheSmallestSegmentsAndZeroMeansTheToolsShar
     const auto coarse_sizes = segmentSizes(coarse.samples[i].labels);
     const auto fine_sizes = segmentSizes(fine.samples[i].labels);
     for (const auto& [label, size] : coarse_sizes) EXPECT_GE(size, 300) << "segment " << label;
-    for (const auto& [label, size] : fine_sizes) EXPECT_GE(size, 15) << "segment " << label;
+    for (const auto& [label, size] : fine_sizes) EXPECT_GE(size, 10) << "segment " << label;
     coarse_segments += coarse_sizes.size();
     fine_segments += fine_sizes.size();
   }
@@ -164,7 +164,7 @@ TEST(DatasetInfo, SegmentMinimumsAreRecordedAndOldInfoFilesMeanFiftyWithoutParal
   info.input_labels_from_segmenter = true;
   info.segment_min_points = 0;
   EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_points, 0);
-  EXPECT_NE(info.describe().find("1.5 %"), std::string::npos);
+  EXPECT_NE(info.describe().find("the tools' rule (1 %"), std::string::npos);
   info.segment_min_points = 31;
   EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_points, 31);
   EXPECT_NE(info.describe().find("at least 31 points"), std::string::npos);

@@ -35,22 +35,46 @@ SurfaceMesh makeUChannel(double width, double height, double wall, double length
   return makePrism({{0, 0}, {w, 0}, {w, h}, {w - t, h}, {w - t, t}, {t, t}, {t, h}, {0, h}}, length);
 }
 
-SurfaceMesh makeSquareTube(double outer, double wall, double length) {
-  const double a = outer, t = wall;
-  // Corners counter-clockwise from above: outer 0-3, inner 4-7, at z = 0; then the same at length.
-  const std::vector<Eigen::Vector2d> corners = {{0, 0}, {a, 0},     {a, a},         {0, a},
-                                                {t, t}, {a - t, t}, {a - t, a - t}, {t, a - t}};
+namespace {
+
+// The extrusion from z = 0 to z = height of the ring between an outer and an inner quadrilateral
+// (`corners`: outer 0-3, then inner 4-7, each counter-clockwise from above, corner k of one facing
+// corner k of the other). Outer walls face out, inner walls into the hole. Each end is one quad
+// per side, or two triangles when a quad would not be convex (an inner quad turned against the
+// outer one).
+SurfaceMesh extrudeRing(const std::vector<Eigen::Vector2d>& corners, double height, bool triangulated_ends) {
   SurfaceMesh m;
-  for (const double z : {0.0, length})
+  for (const double z : {0.0, height})
     for (const auto& c : corners) m.vertices.emplace_back(c.x(), c.y(), z);
   for (std::uint32_t i = 0; i < 4; ++i) {
     const std::uint32_t j = (i + 1) % 4;
     m.faces.push_back({i, j, 8 + j, 8 + i});            // outer wall, facing out
     m.faces.push_back({4 + j, 4 + i, 12 + i, 12 + j});  // inner wall, facing the hole
-    m.faces.push_back({4 + i, 4 + j, j, i});            // bottom frame, facing -z
-    m.faces.push_back({8 + i, 8 + j, 12 + j, 12 + i});  // top frame, facing +z
+    if (triangulated_ends) {
+      m.faces.push_back({4 + i, j, i});  // bottom, facing -z
+      m.faces.push_back({4 + i, 4 + j, j});
+      m.faces.push_back({8 + i, 8 + j, 12 + i});  // top, facing +z
+      m.faces.push_back({8 + j, 12 + j, 12 + i});
+    } else {
+      m.faces.push_back({4 + i, 4 + j, j, i});            // bottom frame, facing -z
+      m.faces.push_back({8 + i, 8 + j, 12 + j, 12 + i});  // top frame, facing +z
+    }
   }
   return m;
+}
+
+}  // namespace
+
+SurfaceMesh makeSquareTube(double outer, double wall, double length) {
+  const double a = outer, t = wall;
+  return extrudeRing({{0, 0}, {a, 0}, {a, a}, {0, a}, {t, t}, {a - t, t}, {a - t, a - t}, {t, a - t}}, length, false);
+}
+
+SurfaceMesh makePlateWithDiamondHole(double hole, double thickness) {
+  const double r = hole;
+  // The hole's corners below, right of, above and left of the centre face the plate's edges.
+  return extrudeRing({{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5 - r}, {0.5 + r, 0.5}, {0.5, 0.5 + r}, {0.5 - r, 0.5}},
+                     thickness, true);
 }
 
 SurfaceMesh makeChamferedCube(double c) {

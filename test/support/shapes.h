@@ -34,6 +34,10 @@ SurfaceMesh makeUChannel(double width, double height, double wall, double length
 /// z = 0 to z = length. 4 outer and 4 inner walls, each end a frame of 4 quads (8 planes); volume
 /// length * (outer^2 - (outer - 2 wall)^2).
 SurfaceMesh makeSquareTube(double outer, double wall, double length);
+/// A unit square plate from z = 0 to z = thickness with a through hole turned by 45 degrees: a
+/// square of half-diagonal `hole` centred on the plate, whose 4 walls (normals (+-1, +-1, 0) / sqrt 2)
+/// are parallel to no other face. 10 planes; the top and bottom are rings of 8 triangles.
+SurfaceMesh makePlateWithDiamondHole(double hole, double thickness);
 /// Applies x -> R x + t to every vertex.
 void transformMesh(SurfaceMesh& mesh, const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation);
 

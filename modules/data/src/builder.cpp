@@ -56,7 +56,7 @@ PartSamples buildPart(const std::string& part, const SurfaceMesh& mesh, const Bu
   if (options.segment && !segmentationAvailable())
     throw InvalidInputError("--segment needs the segmentation module; rebuild paco with it enabled");
   if (options.segment && info.segment_min_points < 0)
-    throw InvalidInputError("segment_min_points must be >= 0 (0: 1.5 % of each input's points)");
+    throw InvalidInputError("segment_min_points must be >= 0 (0: 1 % of each input's points)");
   mesh.validate(part);
 
   PartSamples out;

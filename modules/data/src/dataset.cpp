@@ -198,7 +198,7 @@ std::string DatasetInfo::describe() const {
   } else {
     out << "PlanarSegmenter, planes of at least "
         << (segment_min_points > 0 ? std::to_string(segment_min_points) + " points"
-                                   : std::string("1.5 % of the input's points (the tools' rule)"));
+                                   : std::string("the tools' rule (1 % of the input's points since 2026-12-05, 1.5 % before)"));
     if (segment_min_parallel_points >= 0)
       out << ", planes parallel to a larger one of at least "
           << (segment_min_parallel_points > 0 ? std::to_string(segment_min_parallel_points) + " points"

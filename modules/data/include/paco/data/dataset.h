@@ -96,8 +96,9 @@ struct DatasetInfo {
   int dense_points = 16384;           ///< dense surface sample the views are cut from
   bool input_labels_from_segmenter = false;
   /// With input_labels_from_segmenter: the segmenter's smallest plane, in points; 0 means
-  /// paco::scanMinPointsPerPlane of each input (1.5 %, the tools' rule). Datasets written before
-  /// this key existed were segmented with the class default, 50.
+  /// paco::scanMinPointsPerPlane of each input (the tools' rule: 1 %, and 1.5 % before
+  /// 2026-12-05). Datasets written before this key existed were segmented with the class
+  /// default, 50.
   int segment_min_points = 50;
   /// With input_labels_from_segmenter: the smallest plane parallel to a larger one, in points
   /// (PlanarSegmenter::setMinPointsPerParallelPlane); 0 means paco::scanMinPointsPerParallelPlane
