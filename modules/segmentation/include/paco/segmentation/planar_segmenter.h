@@ -27,7 +27,7 @@ namespace paco {
 /// leave out many of a part's pockets and steps. 1 % (20 points) finds the walls of small holes
 /// and pockets that 1.5 % (31) left out: on 300 validation parts PolyFit's CD fell by 0.064 and
 /// HD by 0.37, with no failure (thirty-fourth session; 1.5 % before, when 1 % still made PolyFit
-/// fail and grew a real roof scan). A share, unlike a count, also keeps the noise planes of dense
+/// fail and the real roof scans worse). A share, unlike a count, also keeps the noise planes of dense
 /// real scans out (doc/results.md, "Smaller planes").
 constexpr double kScanMinPlaneFraction = 0.01;
 
