@@ -881,12 +881,17 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   }
   // What the seen faces show for the box fill's free space: the scan's segments, and the
   // network's points of each seen face that the scan did not contradict, facing as the scan saw
-  // that face. The clip and the scanner's view below drop the same points from both.
-  std::vector<PlanarPrimitive> shown = observed;
-  std::vector<std::size_t> shown_of(completed.size(), observed.size());
+  // that face. The clip and the scanner's view below drop the same points from both. Only the
+  // fill reads it, so without the fill it stays empty (no copy of the scan).
+  const bool fill = options.fill_spacing > 0.0 && !observed.empty();
+  constexpr std::size_t kNotShown = std::numeric_limits<std::size_t>::max();
+  std::vector<PlanarPrimitive> shown;
+  if (fill) shown = observed;
+  std::vector<std::size_t> shown_of(completed.size(), kNotShown);
   for (std::size_t c = 0; c < completed.size(); ++c) {
     if (!snapped[c]) continue;
     completed[c].points += predicted_points[c];
+    if (!fill) continue;
     PlanarPrimitive network_part;
     network_part.plane = seen_plane[c];
     network_part.points = std::move(predicted_points[c]);
@@ -912,7 +917,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       if (absorbed[c]) continue;
       const std::size_t before = completed[c].points.size();
       const std::size_t gone = keepInside(box, completed[c].points);
-      if (shown_of[c] < shown.size()) keepInside(box, shown[shown_of[c]].points);
+      if (shown_of[c] != kNotShown) keepInside(box, shown[shown_of[c]].points);
       counts.clipped_points += gone;
       if (!snapped[c] && 2 * gone > before) {
         clipped[c] = true;
@@ -929,7 +934,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       const std::size_t before = points.size();
       const std::size_t gone =
           keepWhere(points, [&](std::size_t i) { return !scanner.wouldHaveSeen(position(points[i])); });
-      if (shown_of[c] < shown.size()) {
+      if (shown_of[c] != kNotShown) {
         auto& network_part = shown[shown_of[c]].points;
         keepWhere(network_part, [&](std::size_t i) { return !scanner.wouldHaveSeen(position(network_part[i])); });
       }
@@ -954,7 +959,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     fused.push_back(std::move(primitive));
     seen_face.push_back(true);
   }
-  if (options.fill_spacing > 0.0 && !observed.empty()) {
+  if (fill) {
     fillSeenBox(seen_box, shown, options, fused, seen_face, counts);
     capProfileEnds(seen_box, observed, max_angle, options.max_distance, fused, counts);
   }
