@@ -115,7 +115,7 @@ int run(int argc, char** argv) {
       ("merge-distance", po::value(&merge_distance)->default_value(merge_distance, shortNumber(merge_distance)),
        "... and this mean point distance (fraction of the diagonal; 0: never merge)")
       ("max-candidate-faces", po::value(&max_candidate_faces)->default_value(max_candidate_faces),
-       "polyfit: leave out the least confident primitives (confidence below 0.99) until the candidate faces fit (0: no limit)")
+       "polyfit: leave out the least confident primitives (confidence < 1) until the candidate faces fit (0: no limit)")
       ("no-warm-start", "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
       ("verbose,v", "print the MIP solver's log");
   po::options_description hidden;

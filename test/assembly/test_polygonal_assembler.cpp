@@ -396,44 +396,6 @@ TEST(PolyFit, CandidateFaceBudgetNeverLeavesOutAPlaneOfTheHull) {
   EXPECT_EQ(countPlanarRegions(box_mesh), 6u);
 }
 
-TEST(PolyFit, CandidateFaceBudgetNeverLeavesOutAFaceTheSeenExtentImplies) {
-  // A box whose +x face is one the box fill added (kSeenExtentConfidence), and whose observed +y
-  // face carries a strip of points a little beyond x = 1 (the network's points of a seen face
-  // reach past the seen box): more than 1 % of all points lie beyond the +x plane, so it no longer
-  // counts as a plane of the hull. A budget no set of planes fits lets every patch go, and then
-  // the +x face would be the least confident left: it must stay.
-  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
-  std::size_t plus_x = primitives.size(), plus_y = primitives.size();
-  for (std::size_t k = 0; k < primitives.size(); ++k) {
-    if (primitives[k].plane.normal.x() > 0.99) plus_x = k;
-    if (primitives[k].plane.normal.y() > 0.99) plus_y = k;
-  }
-  ASSERT_LT(plus_x, primitives.size());
-  ASSERT_LT(plus_y, primitives.size());
-  primitives[plus_x].confidence = paco::kSeenExtentConfidence;
-  std::size_t total = 0;
-  for (const auto& primitive : primitives) total += primitive.points.size();
-  const std::size_t strays = total / 20;  // 5 % of the box's points
-  for (std::size_t i = 0; i < strays; ++i) {
-    pcl::PointNormal p;
-    p.x = 1.03f;  // beyond the hull tolerance (1 % of the diagonal, 0.014)
-    p.y = 0.8f;
-    p.z = static_cast<float>(0.6 * (static_cast<double>(i) + 0.5) / static_cast<double>(strays));
-    primitives[plus_y].points.push_back(p);
-  }
-  const std::size_t box_planes = primitives.size();
-  addPredictedPatchesThroughTheBox(primitives);
-  SurfaceMesh mesh;
-  const paco::AssemblyResult result = assembleWithBudget(primitives, 3, mesh);
-  ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
-  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
-  EXPECT_NE(result.fates[plus_x].kind, paco::PrimitiveFate::Dropped);
-  EXPECT_EQ(result.num_dropped, primitives.size() - box_planes) << result.message;  // every patch, nothing else
-  double max_x = -1.0;
-  for (const Eigen::Vector3d& v : mesh.vertices) max_x = std::max(max_x, v.x());
-  EXPECT_GT(max_x, 0.99);  // not cut at a patch inside the box
-}
-
 TEST(PolyFit, WarmStartIsTheCellComplexSurfaceAndKeepsTheOptimum) {
   auto assemble = [](const SurfaceMesh& truth, bool warm_start, const std::string& solver, SurfaceMesh& mesh) {
     paco::PolygonalAssembler assembler;

@@ -5,7 +5,6 @@
 #include "mip_traits.h"
 
 #include <paco/common/angles.h>
-#include <paco/common/primitive.h>
 #include <paco/common/progress.h>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -236,15 +235,12 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
       countCandidates(*reconstruction) > options.max_candidate_faces) {
     // Leave out the k least confident predicted primitives (observed ones have confidence 1),
     // with the smallest k that fits the budget, found by bisection (fewer planes give fewer
-    // candidates, if not strictly). At least 4 planes stay, no plane of the hull, and no face the
-    // seen extent implies (kSeenExtentConfidence): a few of the network's points beyond a box
-    // face can hide that it bounds the hull, and without it PolyFit cuts off the slab behind it
-    // (the real scan AHN3_16627 seen from above lost all but its roof). When only those are left,
-    // the candidates stay over the budget (the solver's time limit still holds).
+    // candidates, if not strictly). At least 4 planes stay, and no plane of the hull: when only
+    // those are left, the candidates stay over the budget (the solver's time limit still holds).
     const std::vector<bool> on_hull = hullFaces(primitives);
     std::vector<std::size_t> droppable;
     for (std::size_t k = 0; k < primitives.size(); ++k)
-      if (primitives[k].confidence < kSeenExtentConfidence && !on_hull[k]) droppable.push_back(k);
+      if (primitives[k].confidence < 1.0f && !on_hull[k]) droppable.push_back(k);
     std::stable_sort(droppable.begin(), droppable.end(), [&](std::size_t a, std::size_t b) {
       return primitives[a].confidence < primitives[b].confidence;
     });

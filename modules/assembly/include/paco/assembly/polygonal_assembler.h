@@ -142,9 +142,8 @@ class PolygonalAssembler {
   double getTimeLimit() const { return time_limit_; }
 
   /// PolyFit: when the candidate faces exceed this many, the least confident primitives with
-  /// confidence < kSeenExtentConfidence (the network's guesses; not observed faces, nor the faces
-  /// the seen extent implies) are left out until they fit, but never a plane of the hull (nearly
-  /// all points on one side: without it PolyFit would cut off a slab); they are
+  /// confidence < 1 (predicted, not observed) are left out until they fit, but never a plane of
+  /// the hull (nearly all points on one side: without it PolyFit would cut off a slab); they are
   /// reported as Dropped in getResult().fates. The binary program grows much faster than the number of planes:
   /// CBC solves ~800 candidate faces in a fraction of a second, ~1,300 in seconds and often finds
   /// no solution at all for ~2,000 within a minute. 0: no limit. Default 1000.

@@ -21,12 +21,6 @@ struct PlanarPrimitive {
   float confidence = 1.0f;                    ///< in [0, 1]; 1 for segments of an observed cloud
 };
 
-/// The confidence of the faces observed fusion adds where the seen extent implies a face (the box
-/// fill's faces and a profile's end caps): below a seen face (1), above the network's guesses.
-/// PolyFit's candidate-face budget never leaves out a primitive this confident
-/// (PolygonalAssembler::setMaxCandidateFaces): without such a face the solid is open on that side.
-constexpr float kSeenExtentConfidence = 0.99f;
-
 /// The result of planar segmentation of a cloud of N points.
 struct PlanarSegmentation {
   std::vector<int> labels;                      ///< N entries: segment index, or -1 for none
