@@ -200,6 +200,10 @@ int run(int argc, char** argv) {
   std::printf("assemble (%s): %zu faces, %zu vertices, %s\n", o.assembler.c_str(), mesh.faces.size(),
               mesh.vertices.size(), result.topology.describe().c_str());
   if (!result.message.empty()) std::printf("  note: %s\n", result.message.c_str());
+  else if (result.hit_time_limit)
+    std::printf("  note: the MIP solver stopped at --time-limit %s s with its best solution so far, not proven "
+                "optimal; a longer limit may give a better mesh\n",
+                paco::app::shortNumber(o.time_limit).c_str());
   if (result.num_merged || result.num_dropped) {
     // Say why primitives were not used, so that a surprising mesh can be traced to its cause.
     std::printf("  %zu of %zu primitives used: %zu merged as near-duplicates, %zu with too few points dropped, "

@@ -499,14 +499,14 @@ void fillSeenBox(const SeenBox& seen, const std::vector<PlanarPrimitive>& shown,
       fused.back().plane = face.plane;
       // Below a seen face (1) but above the network's guesses: the seen extent implies it, and
       // PolyFit's candidate-face budget leaves out the least confident primitives first.
-      fused.back().confidence = 0.99f;
+      fused.back().confidence = kImpliedFaceConfidence;
       ++counts.filled_faces;
     } else if (host < seen_face.size() && !seen_face[host]) {
       // The network's guess of this face, a few degrees off: the seen extent fixes the plane, and
       // like a new box face it must outrank the guesses, or the candidate-face budget may leave
       // the hull's face out while it keeps a worse guess.
       takePlane(fused[host], face.plane);
-      fused[host].confidence = std::max(fused[host].confidence, 0.99f);
+      fused[host].confidence = std::max(fused[host].confidence, kImpliedFaceConfidence);
       ++counts.box_faces_taken;
     }
     PlanarPrimitive& target = fused[host];
@@ -634,7 +634,7 @@ void capProfileEnds(const SeenBox& seen, const std::vector<PlanarPrimitive>& obs
     PlanarPrimitive face;
     face.plane = plane;
     // As a box face: below a seen face, above the network's guesses.
-    face.confidence = 0.99f;
+    face.confidence = kImpliedFaceConfidence;
     for (const Eigen::Vector3d& local : locals) {
       pcl::PointNormal p;
       p.getVector3fMap() = (seen.axes * local).cast<float>();

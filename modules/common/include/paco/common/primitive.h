@@ -14,6 +14,12 @@
 
 namespace paco {
 
+/// The confidence of a face that the observation implies without showing it (the observed
+/// fusion's faces of the seen box): above every network guess, below an observed face (1).
+/// PolyFit's candidate-face budget, which leaves out the least confident first, keeps them longer
+/// than any guess.
+constexpr float kImpliedFaceConfidence = 0.99f;
+
 /// A planar primitive: a plane, the inlier points on it (with normals) and a confidence.
 struct PlanarPrimitive {
   Plane plane;
