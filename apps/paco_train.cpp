@@ -17,7 +17,9 @@
 
 #include <boost/program_options.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -59,6 +61,7 @@ struct Options {
   std::string export_from;
   std::string init_from;
   std::string extent_head_for;
+  std::string feature_cache;
 };
 
 // Writes the network of a training checkpoint without its training state: the file a user loads
@@ -77,29 +80,173 @@ int exportModel(const Options& o) {
   return 0;
 }
 
+// One split's extent examples on disk (--feature-cache), so that an interrupted feature pass (about
+// an hour on MFCAD's 48 k training samples) goes on where it stopped, and a head can be trained
+// again with other settings without one. A header ties the file to the network and to the samples
+// picked; then one fixed-size record per pick, in order: a byte (1: an example, 0: the sample has
+// no labelled plane), the features, the six targets. A record cut short by a kill is computed again.
+class ExtentFeatureCache {
+ public:
+  using Record = std::optional<paco::ExtentExample>;
+
+  ExtentFeatureCache(fs::path file, std::uint64_t fingerprint, std::uint64_t picks_key, int width)
+      : file_(std::move(file)), fingerprint_(fingerprint), picks_key_(picks_key), width_(width) {}
+
+  // The records already in the file (none when there is no file), which is then opened to append
+  // the others. Throws InvalidInputError for a file of another kind or made for other inputs.
+  std::vector<Record> open() {
+    std::vector<Record> records;
+    std::error_code ec;
+    if (fs::exists(file_, ec)) records = read();
+    const std::uintmax_t whole = kHeaderBytes + records.size() * recordBytes();
+    if (records.empty()) {
+      std::ofstream out(file_, std::ios::binary | std::ios::trunc);
+      writeHeader(out);
+      if (!out) throw paco::IoError("cannot write the feature cache '" + file_.string() + "'");
+    } else {
+      fs::resize_file(file_, whole, ec);  // drops a record cut short
+      if (ec) throw paco::IoError("cannot resize the feature cache '" + file_.string() + "': " + ec.message());
+    }
+    out_.open(file_, std::ios::binary | std::ios::app);
+    if (!out_) throw paco::IoError("cannot append to the feature cache '" + file_.string() + "'");
+    return records;
+  }
+
+  void append(const Record& record) {
+    const char present = record ? 1 : 0;
+    out_.write(&present, 1);
+    std::vector<float> values(static_cast<std::size_t>(width_ + paco::kBoxSides), 0.0f);
+    if (record) {
+      if (static_cast<int>(record->features.size()) != width_)
+        throw paco::InvalidInputError("feature cache: an example has " + std::to_string(record->features.size()) +
+                                      " features, the cache " + std::to_string(width_));
+      std::copy(record->features.begin(), record->features.end(), values.begin());
+      std::copy(record->beyond.begin(), record->beyond.end(), values.begin() + width_);
+    }
+    out_.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
+    out_.flush();  // a record costs a forward pass; writing it at once loses nothing to a kill
+    if (!out_) throw paco::IoError("cannot append to the feature cache '" + file_.string() + "'");
+  }
+
+ private:
+  static constexpr char kMagic[8] = {'P', 'A', 'C', 'O', 'X', 'F', '0', '1'};
+  static constexpr std::uintmax_t kHeaderBytes = sizeof kMagic + 2 * sizeof(std::uint64_t) + sizeof(std::int32_t);
+
+  std::uintmax_t recordBytes() const { return 1 + sizeof(float) * static_cast<std::uintmax_t>(width_ + paco::kBoxSides); }
+
+  void writeHeader(std::ofstream& out) const {
+    const std::int32_t width = width_;
+    out.write(kMagic, sizeof kMagic);
+    out.write(reinterpret_cast<const char*>(&fingerprint_), sizeof fingerprint_);
+    out.write(reinterpret_cast<const char*>(&picks_key_), sizeof picks_key_);
+    out.write(reinterpret_cast<const char*>(&width), sizeof width);
+  }
+
+  std::vector<Record> read() const {
+    const std::string what = "the feature cache '" + file_.string() + "'";
+    std::ifstream in(file_, std::ios::binary);
+    char magic[sizeof kMagic] = {};
+    std::uint64_t fingerprint = 0, picks_key = 0;
+    std::int32_t width = 0;
+    in.read(magic, sizeof magic);
+    in.read(reinterpret_cast<char*>(&fingerprint), sizeof fingerprint);
+    in.read(reinterpret_cast<char*>(&picks_key), sizeof picks_key);
+    in.read(reinterpret_cast<char*>(&width), sizeof width);
+    if (!in || !std::equal(magic, magic + sizeof magic, kMagic))
+      throw paco::InvalidInputError(what + " is not one (unreadable or truncated header); delete it or give another "
+                                           "--feature-cache folder");
+    if (fingerprint != fingerprint_ || width != width_)
+      throw paco::InvalidInputError(what + " holds the features of another network; delete it or give another "
+                                           "--feature-cache folder");
+    if (picks_key != picks_key_)
+      throw paco::InvalidInputError(what + " was made for other samples (other datasets, --limit-train or "
+                                           "--limit-val); delete it or give another --feature-cache folder");
+    std::vector<Record> records;
+    std::vector<float> values(static_cast<std::size_t>(width_ + paco::kBoxSides));
+    for (;;) {
+      char present = 0;
+      if (!in.read(&present, 1)) break;
+      if (!in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float))))
+        break;  // cut short
+      if (present != 0 && present != 1) throw paco::InvalidInputError(what + " is corrupt; delete it");
+      if (!present) {
+        records.emplace_back();
+        continue;
+      }
+      paco::ExtentExample example;
+      example.features.assign(values.begin(), values.begin() + width_);
+      std::copy(values.begin() + width_, values.end(), example.beyond.begin());
+      records.emplace_back(std::move(example));
+    }
+    return records;
+  }
+
+  fs::path file_;
+  std::uint64_t fingerprint_, picks_key_;
+  int width_;
+  std::ofstream out_;
+};
+
+// What a feature cache is made for: the datasets' folders and the samples picked from them.
+std::uint64_t picksKey(const std::vector<std::string>& folders, paco::data::Split split,
+                       const std::vector<std::pair<std::size_t, std::size_t>>& picks) {
+  std::uint64_t hash = 14695981039346656037ull;  // FNV-1a
+  const auto mix = [&](const std::string& text) {
+    for (unsigned char c : text) hash = (hash ^ c) * 1099511628211ull;
+    hash = (hash ^ 0xffu) * 1099511628211ull;  // a separator, so that "ab","c" differs from "a","bc"
+  };
+  for (const auto& folder : folders) mix(fs::weakly_canonical(folder).string());
+  mix(split == paco::data::Split::Train ? "train" : "val");
+  for (const auto& [dataset, index] : picks) mix(std::to_string(dataset) + ":" + std::to_string(index));
+  return hash;
+}
+
 // The examples of one split of the datasets for a hidden-extent head: each sample's input with its
 // stored labels, seen by the model's network, and how far its complete part reaches beyond it.
-// Empty when interrupted.
+// With `cache_folder`, taken from and added to its feature cache. Empty when interrupted.
 std::vector<paco::ExtentExample> extentExamples(const paco::CompletionModel::ConstPtr& model,
+                                                const std::vector<std::string>& folders,
                                                 const std::vector<std::shared_ptr<const paco::data::Dataset>>& datasets,
-                                                paco::data::Split split, std::size_t limit, bool quiet) {
+                                                paco::data::Split split, std::size_t limit, bool quiet,
+                                                const std::string& cache_folder) {
   const auto picks = paco::completion::evenlySpacedSamples(datasets, split, limit);
-  std::vector<paco::ExtentExample> examples;
+  const char* name = split == paco::data::Split::Train ? "training" : "validation";
+  std::vector<ExtentFeatureCache::Record> records;
+  std::optional<ExtentFeatureCache> cache;
+  if (!cache_folder.empty()) {
+    cache.emplace(fs::path(cache_folder) / (std::string(name) + ".features"), paco::networkFingerprint(*model),
+                  picksKey(folders, split, picks), model->config().global_width + 3);
+    records = cache->open();
+    if (records.size() > picks.size())
+      throw paco::InvalidInputError("the feature cache in '" + cache_folder + "' holds more " + name +
+                                    " samples than this command picks; delete it");
+    if (!quiet && !records.empty())
+      std::printf("%s samples: %zu of %zu from the feature cache in '%s'\n", name, records.size(), picks.size(),
+                  cache_folder.c_str());
+  }
   std::optional<paco::ProgressBar> bar;
-  if (!quiet) bar.emplace(split == paco::data::Split::Train ? "training samples" : "validation samples", picks.size());
-  for (const auto& [dataset, index] : picks) {
+  if (!quiet && records.size() < picks.size())
+    bar.emplace(std::string(name) + " samples", picks.size() - records.size());
+  for (std::size_t k = records.size(); k < picks.size(); ++k) {
     if (paco::interruptRequested()) return {};
+    const auto [dataset, index] = picks[k];
     const paco::data::Sample sample = datasets[dataset]->load(split, index);
     const auto segmentation = paco::PlanarSegmentation::fromLabels(sample.input, sample.input_labels);
+    ExtentFeatureCache::Record record;
     if (!segmentation.empty()) {
       const auto observation = paco::observeExtent(model, sample.input.makeShared(), segmentation);
       std::vector<Eigen::Vector3d> complete;
       for (const auto& p : sample.gt_points) complete.push_back(p.getVector3fMap().cast<double>());
-      examples.push_back({observation.features, paco::extentBeyond(observation, complete)});
+      record = paco::ExtentExample{observation.features, paco::extentBeyond(observation, complete)};
     }
+    if (cache) cache->append(record);
+    records.push_back(std::move(record));
     if (bar) bar->advance();
   }
   if (bar) bar->finish();
+  std::vector<paco::ExtentExample> examples;
+  for (auto& record : records)
+    if (record) examples.push_back(std::move(*record));
   return examples;
 }
 
@@ -151,12 +298,21 @@ int trainExtentHead(const Options& o, const po::variables_map& vm) {
     std::printf("interrupted: no head written\n");
     return 130;
   };
-  const auto train = extentExamples(model, datasets, paco::data::Split::Train, o.limit_train, o.quiet);
+  if (!o.feature_cache.empty()) {
+    std::error_code ec;
+    fs::create_directories(o.feature_cache, ec);
+    if (!fs::is_directory(o.feature_cache))
+      throw paco::IoError("cannot create the --feature-cache folder '" + o.feature_cache + "'" +
+                          (ec ? ": " + ec.message() : std::string()));
+  }
+  const auto train =
+      extentExamples(model, o.datasets, datasets, paco::data::Split::Train, o.limit_train, o.quiet, o.feature_cache);
   if (paco::interruptRequested()) return interrupted();
   if (train.empty())
     throw paco::InvalidInputError("no training sample with a labelled plane in the datasets; build them with "
                                   "paco_dataset (--segment labels them as paco_reconstruct does)");
-  const auto val = extentExamples(model, datasets, paco::data::Split::Val, o.limit_val == 0 ? 1500 : o.limit_val, o.quiet);
+  const auto val = extentExamples(model, o.datasets, datasets, paco::data::Split::Val,
+                                  o.limit_val == 0 ? 1500 : o.limit_val, o.quiet, o.feature_cache);
   if (paco::interruptRequested()) return interrupted();
   paco::ExtentTrainingOptions options;
   options.epochs = o.epochs;
@@ -272,6 +428,9 @@ int run(int argc, char** argv) {
        "instead of the network, train a hidden-extent head for this model on the datasets' samples and their "
        "stored labels (-o HEAD.pt; --epochs, --lr (default here 1e-3), --limit-train, --limit-val (default 1500), "
        "--seed, --threads apply; doc/training.md)")
+      ("feature-cache", po::value(&o.feature_cache),
+       "with --extent-head-for: keep the network's features of each sample in this folder (created), so that an "
+       "interrupted run goes on where it stopped and a head can be trained again without the feature pass")
       ("checkpoint-every", po::value(&o.checkpoint_every)->default_value(o.checkpoint_every),
        "also save last.pt every N steps inside an epoch (0 = only at epoch ends), so a killed run loses little")
       ("quiet", po::bool_switch(&o.quiet), "no progress bars");
@@ -288,6 +447,8 @@ int run(int argc, char** argv) {
     if (o.output.empty()) throw paco::app::UsageError("--export needs -o MODEL.pt");
     return exportModel(o);
   }
+  if (!o.feature_cache.empty() && o.extent_head_for.empty())
+    throw paco::app::UsageError("--feature-cache needs --extent-head-for (the network's own training resumes with --resume)");
   if (!o.extent_head_for.empty()) return trainExtentHead(o, vm);
   if (o.datasets.empty()) throw paco::app::UsageError("expected DATASET_DIR (a folder written by paco_dataset)");
   if (o.output.empty()) throw paco::app::UsageError("expected -o CHECKPOINT_DIR");

@@ -474,6 +474,36 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
   EXPECT_NE(paco::test::runCommand(head_base + dir.file("missing.pt") + " -o " + dir.file("h2.pt"), &output), 0);
   EXPECT_NE(output.find("missing.pt"), std::string::npos) << output;
   EXPECT_FALSE(std::filesystem::exists(dir.file("h2.pt")));
+  // --feature-cache: a second run takes every sample's features from the cache; a record cut short
+  // by a kill is computed again; a cache of another network is refused.
+  const std::string cached = head_base + dir.file("model.pt") + " --feature-cache " + dir.file("cache") + " -o ";
+  ASSERT_EQ(paco::test::runCommand(cached + dir.file("head_c1.pt"), &output), 0) << output;
+  const std::string train_cache = dir.file("cache") + "/training.features";
+  ASSERT_TRUE(std::filesystem::exists(train_cache));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("cache") + "/validation.features"));
+  const auto verbose = [](std::string command) { return command.replace(command.find(" --quiet"), 8, ""); };
+  ASSERT_EQ(paco::test::runCommand(verbose(cached) + dir.file("head_c2.pt"), &output), 0) << output;
+  EXPECT_NE(output.find("training samples: 6 of 6 from the feature cache"), std::string::npos) << output;
+  EXPECT_NE(output.find("training: 6 samples"), std::string::npos) << output;
+  std::filesystem::resize_file(train_cache, std::filesystem::file_size(train_cache) - 5);
+  ASSERT_EQ(paco::test::runCommand(verbose(cached) + dir.file("head_c3.pt"), &output), 0) << output;
+  EXPECT_NE(output.find("training samples: 5 of 6 from the feature cache"), std::string::npos) << output;
+  EXPECT_NE(output.find("training: 6 samples"), std::string::npos) << output;
+  // The same examples and seed give the same head, from the cache or not.
+  const std::vector<float> probe(static_cast<std::size_t>(head->featureWidth()), 0.25f);
+  const auto first = head->predict(probe);
+  for (const char* name : {"head_c1.pt", "head_c3.pt"}) {
+    const auto again = paco::HiddenExtentModel::load(dir.file(name))->predict(probe);
+    for (int s = 0; s < paco::kBoxSides; ++s) EXPECT_NEAR(again[s], first[s], 1e-5) << name << " side " << s;
+  }
+  paco::PacoNetwork untrained(tinyConfig());  // other weights than the exported model's
+  paco::saveCheckpoint(dir.file("tiny_other.pt"), untrained);
+  EXPECT_NE(paco::test::runCommand(head_base + dir.file("tiny_other.pt") + " --feature-cache " + dir.file("cache") +
+                                       " -o " + dir.file("h3.pt"),
+                                   &output),
+            0);
+  EXPECT_NE(output.find("another network"), std::string::npos) << output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("h3.pt")));
   // --init-from: a new run from the exported weights; not together with --resume.
   const std::string init_base = tool + " " + dir.file("data") + " -o " + dir.file("run2") +
                                 " --batch 2 --threads 1 --input-points 256 --gt-points 512 --quiet --init-from ";
