@@ -8,6 +8,7 @@
 
 #include <paco/common/error.h>
 #include <paco/common/progress.h>
+#include <paco/common/scan_shares.h>
 #include <paco/data/builder.h>
 #include <paco/data/dataset.h>
 #include <paco/data/procedural.h>
@@ -242,10 +243,12 @@ int run(int argc, char** argv) {
       ("dense-points", po::value(&o.dense_points)->default_value(o.dense_points), "dense surface sample views are cut from")
       ("segment", po::bool_switch(&o.segment), "label inputs with PlanarSegmenter (default: GT faces of the visible points)")
       ("segment-min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points),
-       "with --segment: the smallest plane in points; 0: 1 % of each input's points, as paco_reconstruct does")
+       ("with --segment: the smallest plane in points; 0: " + paco::percentText(paco::kScanMinPlaneFraction) +
+        " of each input's points, as paco_reconstruct does").c_str())
       ("segment-min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
-       "with --segment: the smallest plane parallel to a larger one, in points; 0: 0.5 % of each input's points, "
-       "as paco_reconstruct does; negative: none")
+       ("with --segment: the smallest plane parallel to a larger one, in points; 0: " +
+        paco::percentText(paco::kScanMinParallelPlaneFraction) + " of each input's points, as paco_reconstruct does; "
+        "negative: none").c_str())
       ("verify", po::bool_switch(&o.verify_mode), "read a dataset back: DATASET_DIR (with --limit: N samples per split)")
       ("export", po::bool_switch(&o.export_mode), "export one sample: DATASET_DIR OUT.pcd")
       ("export-mesh", po::value(&o.export_mesh), "with --export: also write the GT mesh (normalised frame) here")
@@ -284,7 +287,8 @@ int run(int argc, char** argv) {
   if (o.segment && !paco::data::segmentationAvailable())
     throw paco::app::UsageError("--segment needs the segmentation module, which this build does not have");
   if (o.segment_min_points < 0)
-    throw paco::app::UsageError("--segment-min-points must be >= 0 (0: 1 % of each input's points)");
+    throw paco::app::UsageError("--segment-min-points must be >= 0 (0: " + paco::percentText(paco::kScanMinPlaneFraction) +
+                                " of each input's points)");
   if (o.segment_min_points > 0 && !o.segment)
     throw paco::app::UsageError("--segment-min-points needs --segment");
   if (o.segment_min_parallel_points >= 0 && !o.segment)

@@ -7,6 +7,7 @@
 #include <paco/common/error.h>
 #include <paco/common/point_types.h>
 #include <paco/common/progress.h>
+#include <paco/common/scan_shares.h>
 #include <paco/evaluation/benchmark.h>
 #include <paco/evaluation/metrics.h>
 #include <paco/evaluation/report.h>
@@ -239,7 +240,8 @@ int dataset(const Options& o) {
   for (int view : b.views)
     if (view < 0) throw paco::app::UsageError("--views takes view indices >= 0, got " + std::to_string(view));
   if (o.segment_min_points != 0 && o.segment_min_points < 3)
-    throw paco::app::UsageError("--min-points must be 0 (1 % of the input's points) or at least 3, got " +
+    throw paco::app::UsageError("--min-points must be 0 (" + paco::percentText(paco::kScanMinPlaneFraction) +
+                                " of the input's points) or at least 3, got " +
                                 std::to_string(o.segment_min_points));
   b.limit = o.limit;
   paco::app::validateThreads("--jobs", o.jobs);
@@ -345,9 +347,11 @@ int run(int argc, char** argv) {
       ("complexity", po::value(&o.complexity)->default_value(o.complexity, paco::app::shortNumber(o.complexity)),
        "polyfit complexity weight (>= 0)")
       ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco")
-      ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), "segmenter: fewest points of a plane, >= 3 (0: 1 % of the input's points, at least 3)")
+      ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), ("segmenter: fewest points of a plane, >= 3 (0: " + paco::percentText(paco::kScanMinPlaneFraction) +
+        " of the input's points, at least 3)").c_str())
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
-       "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the input's points; -1: none)")
+       ("segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: " +
+        paco::percentText(paco::kScanMinParallelPlaneFraction) + " of the input's points; -1: none)").c_str())
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")

@@ -23,24 +23,29 @@ inline void addMaxPointsOption(boost::program_options::options_description& opti
 
 inline void addMinPointsOption(boost::program_options::options_description& options, int& min_points) {
   options.add_options()("min-points", boost::program_options::value(&min_points)->default_value(min_points),
-                        "segmenter: fewest points of a plane, >= 3 (0: 1 % of the working cloud's points, at least 3)");
+                        ("segmenter: fewest points of a plane, >= 3 (0: " + percentText(kScanMinPlaneFraction) +
+                         " of the working cloud's points, at least 3)")
+                            .c_str());
 }
 
 inline void validateMinPoints(int min_points) {
   if (min_points != 0 && min_points < 3)
-    throw UsageError("--min-points must be 0 (1 % of the points) or at least 3, got " + std::to_string(min_points));
+    throw UsageError("--min-points must be 0 (" + percentText(kScanMinPlaneFraction) + " of the points) or at least 3, got " +
+                     std::to_string(min_points));
 }
 
 inline void addMinParallelPointsOption(boost::program_options::options_description& options, int& min_points) {
   options.add_options()(
       "min-parallel-points", boost::program_options::value(&min_points)->default_value(min_points),
-      "segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: 0.5 % of the working cloud's points; "
-      "-1: none)");
+      ("segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: " +
+       percentText(kScanMinParallelPlaneFraction) + " of the working cloud's points; -1: none)")
+          .c_str());
 }
 
 inline void validateMinParallelPoints(int min_points) {
   if (min_points != -1 && min_points != 0 && min_points < 3)
-    throw UsageError("--min-parallel-points must be -1 (none), 0 (0.5 % of the points) or at least 3, got " +
+    throw UsageError("--min-parallel-points must be -1 (none), 0 (" + percentText(kScanMinParallelPlaneFraction) +
+                     " of the points) or at least 3, got " +
                      std::to_string(min_points));
 }
 

@@ -1,5 +1,6 @@
 #include <paco/common/error.h>
 #include <paco/common/primitive.h>
+#include <paco/common/scan_shares.h>
 
 #include <gtest/gtest.h>
 
@@ -71,4 +72,10 @@ TEST(PlanarPrimitive, MakePrimitivesCopiesPointsAndUsesPlaneNormalWhenMissing) {
   paco::flattenPrimitives(prims, flat, labels);
   EXPECT_EQ(flat.size(), 4u);
   EXPECT_EQ(labels, (std::vector<int>{0, 0, 1, 1}));
+}
+
+TEST(ScanShares, PercentTextPrintsTheShareAsTheToolsDo) {
+  EXPECT_EQ(paco::percentText(0.01), "1 %");
+  EXPECT_EQ(paco::percentText(0.005), "0.5 %");
+  EXPECT_EQ(paco::percentText(0.015), "1.5 %");
 }

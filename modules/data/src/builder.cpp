@@ -4,6 +4,7 @@
 #include "random.h"
 
 #include <paco/common/error.h>
+#include <paco/common/scan_shares.h>
 #include <paco/io/mesh_io.h>
 
 #include <Eigen/Geometry>
@@ -56,7 +57,8 @@ PartSamples buildPart(const std::string& part, const SurfaceMesh& mesh, const Bu
   if (options.segment && !segmentationAvailable())
     throw InvalidInputError("--segment needs the segmentation module; rebuild paco with it enabled");
   if (options.segment && info.segment_min_points < 0)
-    throw InvalidInputError("segment_min_points must be >= 0 (0: 1 % of each input's points)");
+    throw InvalidInputError("segment_min_points must be >= 0 (0: " + percentText(kScanMinPlaneFraction) +
+                            " of each input's points)");
   mesh.validate(part);
 
   PartSamples out;

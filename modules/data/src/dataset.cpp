@@ -3,6 +3,7 @@
 #include "format.h"
 
 #include <paco/common/error.h>
+#include <paco/common/scan_shares.h>
 #include <paco/io/mesh_io.h>
 
 #include <algorithm>
@@ -202,7 +203,8 @@ std::string DatasetInfo::describe() const {
     if (segment_min_parallel_points >= 0)
       out << ", planes parallel to a larger one of at least "
           << (segment_min_parallel_points > 0 ? std::to_string(segment_min_parallel_points) + " points"
-                                              : std::string("0.5 % of the input's points (the tools' default)"));
+                                              : percentText(kScanMinParallelPlaneFraction) +
+                                                    " of the input's points (the tools' default)");
   }
   out << "\npoints: " << input_points << " per input, " << gt_points << " ground truth, cut from " << dense_points
       << " dense\nseed: " << seed << "\nsource: " << source << "\n";

@@ -5,6 +5,7 @@
 //   seg->setInputCloud(cloud); seg->setDistanceThreshold(0.004);      // fraction of bbox diagonal
 //   paco::PlanarSegmentation result; seg->segment(result);             // labels, planes, segments
 #include <paco/common/primitive.h>
+#include <paco/common/scan_shares.h>
 #include <paco/segmentation/prepared_cloud.h>
 
 #include <pcl/pcl_base.h>
@@ -20,16 +21,6 @@
 #include <vector>
 
 namespace paco {
-
-/// The smallest plane paco_reconstruct, paco_complete and paco_eval keep by default, as a share
-/// of the segmented points (PlanarSegmenter's own default, 50 points, does not scale with the
-/// cloud). On the 2,048-point partial MFCAD scans the network is trained for, 50 points (2.4 %)
-/// leave out many of a part's pockets and steps. 1 % (20 points) finds the walls of small holes
-/// and pockets that 1.5 % (31) left out: on 300 validation parts PolyFit's CD fell by 0.064 and
-/// HD by 0.37, with no failure (thirty-fourth session; 1.5 % before, when 1 % still made PolyFit
-/// fail and the real roof scans worse). A share, unlike a count, also keeps the noise planes of dense
-/// real scans out (doc/results.md, "Smaller planes").
-constexpr double kScanMinPlaneFraction = 0.01;
 
 namespace detail {
 /// `fraction` of `points`, rounded, and at least 3 (the fewest points of any plane).
@@ -48,10 +39,6 @@ inline int scanMinPointsPerPlane(std::size_t points) { return detail::shareOfPoi
 inline int scanMinPointsPerPlane(std::size_t points, int requested) {
   return requested > 0 ? requested : scanMinPointsPerPlane(points);
 }
-
-/// The share of a scan's points a plane parallel to a larger one needs in the tools
-/// (PlanarSegmenter::setMinPointsPerParallelPlane): 0.5 %, 10 of a 2,048-point input.
-constexpr double kScanMinParallelPlaneFraction = 0.005;
 
 /// The fewest points of a plane parallel to a larger one the tools give the segmenter of a cloud
 /// of `points` points: `requested` when > 0; 0 (off) when negative; kScanMinParallelPlaneFraction of
