@@ -132,6 +132,29 @@ TEST(CellComplex, BoxGivesSixQuads) {
   EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 1e-9);
 }
 
+TEST(CellComplex, AnInsideGroupUnderOnePercentOfTheSolidIsLeftOut) {
+  // A box and a separate small box: the small one's 5 cm cube holds 0.03 % of the large one's
+  // volume, the sliver a few stray votes leave; a second box of 26 % stays a second component.
+  auto assemble = [](const SurfaceMesh& second, SurfaceMesh& mesh) {
+    std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeBox({0, 0, 0}, {1, 0.8, 0.6}));
+    for (auto& primitive : primitivesOf(second)) primitives.push_back(std::move(primitive));
+    paco::PolygonalAssembler assembler;
+    assembler.setBackend("cell-complex");
+    assembler.setInputPrimitives(primitives);
+    return assembler.reconstruct(mesh);
+  };
+  SurfaceMesh mesh;
+  const paco::AssemblyResult sliver = assemble(paco::test::makeBox({1.3, 0.3, 0.2}, {1.35, 0.35, 0.25}), mesh);
+  ASSERT_TRUE(sliver.ok()) << sliver.message;
+  EXPECT_TRUE(sliver.topology.isClosedManifold());
+  EXPECT_EQ(sliver.topology.components, 1u);
+  EXPECT_NEAR(paco::signedVolume(mesh), 0.48, 1e-6);
+  const paco::AssemblyResult two = assemble(paco::test::makeBox({1.3, 0.1, 0.05}, {1.8, 0.6, 0.55}), mesh);
+  ASSERT_TRUE(two.ok()) << two.message;
+  EXPECT_EQ(two.topology.components, 2u);
+  EXPECT_NEAR(paco::signedVolume(mesh), 0.48 + 0.125, 1e-6);
+}
+
 // A square primitive of 10 x 10 points centred at `centre`, spanned by the unit vectors u and v
 // (its normal u x v), `size` wide.
 PlanarPrimitive squarePatch(const Eigen::Vector3d& centre, const Eigen::Vector3d& u, const Eigen::Vector3d& v,
