@@ -531,6 +531,51 @@ TEST(PolyFit, AnEmptyOptimumReturnsTheWarmStartsSurface) {
   EXPECT_NEAR(paco::signedVolume(mesh), 1.0, 1e-3);
 }
 
+// The warm start is made from the planes the candidate-face budget keeps, so that it is a
+// solution of the program CBC gets. An L bracket whose two notch planes are the least confident
+// (and not on the hull) and a budget that fits only the other six: a complexity weight that empties
+// PolyFit's optimum makes the assembler return the start, which must then be the box of the six
+// kept planes, with the notch planes reported as left out (a start made from all eight planes
+// had the notch, on planes PolyFit no longer had).
+TEST(PolyFit, TheWarmStartIsMadeFromThePlanesTheBudgetKeeps) {
+  const SurfaceMesh bracket = paco::test::makeLBracket();
+  std::vector<PlanarPrimitive> primitives = primitivesOf(bracket);
+  std::vector<std::size_t> notch, hull;
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    double farthest_out = -1.0;
+    for (const Eigen::Vector3d& v : bracket.vertices)
+      farthest_out = std::max(farthest_out, primitives[k].plane.signedDistance(v));
+    (farthest_out > 1e-6 ? notch : hull).push_back(k);
+  }
+  ASSERT_EQ(notch.size(), 2u);
+  primitives[notch[0]].confidence = 0.3f;
+  primitives[notch[1]].confidence = 0.4f;
+  std::vector<PlanarPrimitive> hull_only;
+  for (std::size_t k : hull) hull_only.push_back(primitives[k]);
+  SurfaceMesh hull_mesh;
+  const std::size_t hull_candidates = assembleWithBudget(hull_only, 0, hull_mesh).num_candidate_faces;
+  ASSERT_GT(hull_candidates, 0u);
+
+  paco::PolygonalAssembler assembler;
+  assembler.setInputPrimitives(primitives);
+  assembler.setMaxCandidateFaces(hull_candidates);
+  assembler.setComplexityWeight(100.0);
+  SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+  EXPECT_TRUE(result.returned_warm_start) << result.message;
+  EXPECT_EQ(result.num_candidate_faces, hull_candidates);
+  EXPECT_EQ(result.num_over_budget, 2u);
+  for (std::size_t k : notch) EXPECT_EQ(result.fates[k].kind, paco::PrimitiveFate::Dropped) << "primitive " << k;
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  EXPECT_EQ(countPlanarRegions(mesh), 6u);
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    for (std::size_t k : notch)
+      EXPECT_FALSE(primitives[k].plane.normal.dot(paco::faceNormal(mesh, f)) > 0.999 &&
+                   std::abs(primitives[k].plane.signedDistance(mesh.vertices[mesh.faces[f][0]])) < 1e-6)
+          << "face " << f << " lies on the left-out notch plane " << k;
+}
+
 // Points on a fifth of each face's width (4 % of its area, as a scanner's sparse patches): their
 // votes weigh less than the cube's area term, and the min-cut at the set smoothness labels every
 // cell outside. The assembler then labels with weaker smoothing and says so. PolyFit returns that

@@ -4,6 +4,7 @@
 #include <paco/assembly/polygonal_assembler.h>
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -37,10 +38,13 @@ struct PolyFitOptions {
   /// When the candidate faces exceed this (0: no limit), the least confident primitives with
   /// confidence < 1 are left out until they fit: the MIP grows much faster than the planes.
   std::size_t max_candidate_faces = 0;
-  /// A closed solid bounded by (some of) the same planes, in the same frame, or null. The
-  /// candidate faces that separate its inside from its outside are given to CBC as a starting
-  /// solution, so that a time-out still returns at least that surface.
-  const SurfaceMesh* start_solid = nullptr;
+  /// Makes the warm start once the budget has chosen the primitives (keep[k]: primitives[k]
+  /// stays): a closed solid bounded by (some of) the kept planes, in the same frame, or null for
+  /// none. The candidate faces that separate its inside from its outside are given to CBC as a
+  /// starting solution, so that a time-out still returns at least that surface. A start made
+  /// from every plane is no solution of the program when the budget left one out, and CBC then
+  /// has no incumbent at all.
+  std::function<const SurfaceMesh*(const std::vector<bool>& keep)> make_start;
 };
 
 BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const PolyFitOptions& options,

@@ -229,7 +229,7 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
     return static_cast<std::size_t>(candidates.number_of_faces());
   };
 
-  std::vector<bool> keep(primitives.size(), true);
+  std::vector<bool> keep(primitives.size(), true);  // what the budget keeps, for the warm start
   std::unique_ptr<Reconstruction> reconstruction = generate(keep);
   if (reconstruction->error_message().empty() && options.max_candidate_faces > 0 &&
       countCandidates(*reconstruction) > options.max_candidate_faces) {
@@ -267,6 +267,7 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
       if (best && best->error_message().empty()) {
         reconstruction = std::move(best);
         outcome.dropped_for_budget.assign(droppable.begin(), droppable.begin() + static_cast<std::ptrdiff_t>(hi));
+        keep = keepAllBut(hi);
       }
     }
   }
@@ -281,15 +282,24 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
     outcome.message = "interrupted after candidate generation";
     return outcome;
   }
+  const SurfaceMesh* start_solid = options.make_start ? options.make_start(keep) : nullptr;
+  if (interruptRequested()) {
+    outcome.status = AssemblyStatus::Interrupted;
+    outcome.message = "interrupted while making the warm start";
+    return outcome;
+  }
   const double left = options.seconds - secondsSince(start);
   if (left <= 0.0) {
     outcome.status = AssemblyStatus::TimeLimit;
-    outcome.message = "PolyFit candidate generation alone took " + std::to_string(secondsSince(start)) +
+    outcome.message = std::string(options.make_start ? "PolyFit candidate generation and its warm start took "
+                                                     : "PolyFit candidate generation alone took ") +
+                      std::to_string(secondsSince(start)) +
                       " s, more than the " + std::to_string(options.seconds) +
                       " s left of the time limit; raise it or use the cell-complex backend";
     return outcome;
   }
 
+  const double solve_from = secondsSince(start);  // the start's time is in neither part
   mipSettings() = MipSettings{};
   mipSettings().deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                                   std::chrono::duration<double>(left));
@@ -297,8 +307,8 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   // The candidate faces, copied once for the start and the count (reconstruct() leaves them as they are).
   CgalMesh candidates;
   reconstruction->output_candidate_faces(candidates);
-  if (options.start_solid && !options.start_solid->faces.empty()) {
-    mipSettings().start = facesOnSolidBoundary(candidates, *options.start_solid, rotation.transpose());
+  if (start_solid && !start_solid->faces.empty()) {
+    mipSettings().start = facesOnSolidBoundary(candidates, *start_solid, rotation.transpose());
     mipSettings().has_fallback = true;  // the assembler returns the start's surface if CBC gives nothing
     outcome.start_faces_released = releaseFacesAtForbiddenEdges(candidates, mipSettings().start, kReleaseRings);
     outcome.start_faces =
@@ -313,7 +323,7 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   else
     solved = reconstruction->reconstruct<Glpk_timed_mixed_integer_program_traits<double>>(
         result, options.wt_fitting, options.wt_coverage, options.wt_complexity);
-  outcome.seconds_solve = secondsSince(start) - outcome.seconds_partition;
+  outcome.seconds_solve = secondsSince(start) - solve_from;
   const MipOutcome& mip = mipOutcome();
   outcome.optimal = mip.optimal;
   outcome.hit_time_limit = mip.hit_time_limit;

@@ -426,30 +426,36 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
     options.seconds = secondsLeft();
     options.verbose = verbose_;
     options.max_candidate_faces = max_candidate_faces_;
-    // The warm start: the cell complex on the same planes, refitted to their points as CGAL
-    // refits them, so that its faces lie on PolyFit's candidate faces.
     std::vector<PlanarPrimitive> separated = primitives;
     result_.num_planes_separated = separateConcurrentPlanes(separated);
     SurfaceMesh start_solid;
     double start_smoothness = smoothness_;
     if (warm_start_ && solver_ == MipSolver::Cbc) {
-      std::vector<PlanarPrimitive> refitted = separated;
-      for (auto& primitive : refitted) primitive.plane = refit(primitive.points, primitive.plane);
-      // PolyFit allows no edge with four faces: relabel cells at such edges right away.
-      detail::CellComplexOptions cell_options;
-      cell_options.smoothness = smoothness_;
-      cell_options.extent_margin = extent_margin_;
-      cell_options.resolve_crossings = true;
-      // Not the whole budget: the start is quick on piecewise-planar inputs, but on others the
-      // cell complex can relabel until its time runs out, and PolyFit needs time of its own.
-      cell_options.seconds = kWarmStartBudgetShare * secondsLeft();
-      const detail::BackendOutcome start_outcome = detail::runCellComplex(refitted, cell_options, start_solid);
-      if (start_outcome.status != AssemblyStatus::Success || !postProcess(start_solid).isClosedManifold())
-        start_solid = SurfaceMesh{};
-      else
+      // The warm start: the cell complex on the planes the budget keeps, refitted to their points
+      // as CGAL refits them, so that its faces lie on PolyFit's candidate faces.
+      options.make_start = [&](const std::vector<bool>& keep) -> const SurfaceMesh* {
+        std::vector<PlanarPrimitive> refitted;
+        for (std::size_t k = 0; k < separated.size(); ++k) {
+          if (!keep[k]) continue;
+          refitted.push_back(separated[k]);
+          refitted.back().plane = refit(separated[k].points, separated[k].plane);
+        }
+        // PolyFit allows no edge with four faces: relabel cells at such edges right away.
+        detail::CellComplexOptions cell_options;
+        cell_options.smoothness = smoothness_;
+        cell_options.extent_margin = extent_margin_;
+        cell_options.resolve_crossings = true;
+        // Not the whole budget: the start is quick on piecewise-planar inputs, but on others the
+        // cell complex can relabel until its time runs out, and PolyFit needs time of its own.
+        cell_options.seconds = kWarmStartBudgetShare * secondsLeft();
+        const detail::BackendOutcome start_outcome = detail::runCellComplex(refitted, cell_options, start_solid);
+        if (start_outcome.status != AssemblyStatus::Success || !postProcess(start_solid).isClosedManifold()) {
+          start_solid = SurfaceMesh{};
+          return nullptr;
+        }
         start_smoothness = start_outcome.smoothness_used;
-      options.seconds = secondsLeft();
-      if (!start_solid.faces.empty()) options.start_solid = &start_solid;
+        return &start_solid;
+      };
     }
     outcome = detail::runPolyFit(separated, options, mesh);
     result_.num_warm_start_faces = outcome.start_faces;
@@ -466,7 +472,6 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
       mesh = start_solid;
       outcome.status = AssemblyStatus::Success;
       outcome.message.clear();
-      outcome.dropped_for_budget.clear();  // the start was made from every primitive
       outcome.hit_time_limit = timed_out;
       result_.returned_warm_start = true;
       if (timed_out)
