@@ -8,6 +8,7 @@
 
 #include <paco/common/blas.h>
 #include <paco/common/error.h>
+#include <paco/common/hash.h>
 #include <paco/common/progress.h>
 #include <paco/completion/checkpoint.h>
 #include <paco/completion/hidden_extent.h>
@@ -190,10 +191,9 @@ class ExtentFeatureCache {
 // What a feature cache is made for: the datasets' folders and the samples picked from them.
 std::uint64_t picksKey(const std::vector<std::string>& folders, paco::data::Split split,
                        const std::vector<std::pair<std::size_t, std::size_t>>& picks) {
-  std::uint64_t hash = 14695981039346656037ull;  // FNV-1a
+  std::uint64_t hash = paco::kFnv1aOffsetBasis;
   const auto mix = [&](const std::string& text) {
-    for (unsigned char c : text) hash = (hash ^ c) * 1099511628211ull;
-    hash = (hash ^ 0xffu) * 1099511628211ull;  // a separator, so that "ab","c" differs from "a","bc"
+    hash = paco::fnv1a("\xff", paco::fnv1a(text, hash));  // a separator, so that "ab","c" differs from "a","bc"
   };
   for (const auto& folder : folders) mix(fs::weakly_canonical(folder).string());
   mix(split == paco::data::Split::Train ? "train" : "val");

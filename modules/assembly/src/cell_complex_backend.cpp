@@ -6,6 +6,7 @@
 // within kOnPlane of a plane is on it, and cells are only split by planes that leave vertices
 // further than that on both sides. Shared corners computed twice differ by ~1e-15 and are welded.
 #include "backends.h"
+#include "disjoint_sets.h"
 #include "mesh_cleanup.h"
 
 #include <paco/common/progress.h>
@@ -504,28 +505,18 @@ constexpr double kMinInsideGroupShare = 0.01;
 // Sets outside every group of face-adjacent inside cells smaller than kMinInsideGroupShare of the
 // largest: a few points that vote inside a tiny cell off the solid leave a closed sliver of its
 // own, a second component of the mesh (3 mm across on the milk carton of ../shared/data/scans
-// and 0.5 m on AHN3_16627, both run with the scanner's view). Returns how many cells it changed.
-std::size_t dropSmallInsideGroups(const std::vector<Cell>& cells, const std::vector<Adjacency>& adjacencies,
-                                  std::vector<bool>& inside) {
-  std::vector<int> parent(cells.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  const auto find = [&](int c) {
-    while (parent[c] != c) c = parent[c] = parent[parent[c]];
-    return c;
-  };
+// and 0.5 m on AHN3_16627, both run with the scanner's view).
+void dropSmallInsideGroups(const std::vector<Cell>& cells, const std::vector<Adjacency>& adjacencies,
+                           std::vector<bool>& inside) {
+  DisjointSets<int> groups(cells.size());
   for (const auto& adjacency : adjacencies)
-    if (inside[adjacency.a] && inside[adjacency.b]) parent[find(adjacency.a)] = find(adjacency.b);
+    if (inside[adjacency.a] && inside[adjacency.b]) groups.join(adjacency.a, adjacency.b);
   std::vector<double> group_volume(cells.size(), 0.0);
   for (std::size_t c = 0; c < cells.size(); ++c)
-    if (inside[c]) group_volume[find(static_cast<int>(c))] += cellVolume(cells[c]);
+    if (inside[c]) group_volume[groups.find(static_cast<int>(c))] += cellVolume(cells[c]);
   const double largest = *std::max_element(group_volume.begin(), group_volume.end());
-  std::size_t changed = 0;
   for (std::size_t c = 0; c < cells.size(); ++c)
-    if (inside[c] && group_volume[find(static_cast<int>(c))] < kMinInsideGroupShare * largest) {
-      inside[c] = false;
-      ++changed;
-    }
-  return changed;
+    if (inside[c] && group_volume[groups.find(static_cast<int>(c))] < kMinInsideGroupShare * largest) inside[c] = false;
 }
 
 }  // namespace

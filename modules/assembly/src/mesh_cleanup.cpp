@@ -1,5 +1,7 @@
 #include "mesh_cleanup.h"
 
+#include "disjoint_sets.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -30,19 +32,14 @@ void mergeCoplanarFaces(SurfaceMesh& mesh) {
       edge_faces[{std::min(a, b), std::max(a, b)}].push_back(f);
     }
   }
-  std::vector<std::uint32_t> parent(nf);
-  std::iota(parent.begin(), parent.end(), 0u);
-  std::function<std::uint32_t(std::uint32_t)> find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets<std::uint32_t> groups(nf);
   std::vector<Eigen::Vector3d> normals(nf);
   for (std::size_t f = 0; f < nf; ++f) normals[f] = faceNormal(mesh, f);
   for (const auto& [edge, faces] : edge_faces)
     if (faces.size() == 2 && faces[0] != faces[1] && normals[faces[0]].dot(normals[faces[1]]) > 1 - 1e-8)
-      parent[find(faces[0])] = find(faces[1]);
+      groups.join(faces[0], faces[1]);
   std::map<std::uint32_t, std::vector<std::uint32_t>> components;
-  for (std::uint32_t f = 0; f < nf; ++f) components[find(f)].push_back(f);
+  for (std::uint32_t f = 0; f < nf; ++f) components[groups.find(f)].push_back(f);
 
   std::vector<std::vector<std::uint32_t>> faces;
   for (const auto& [root, members] : components) {

@@ -1,4 +1,5 @@
 #include <paco/common/error.h>
+#include <paco/common/hash.h>
 #include <paco/common/orientation.h>
 #include <paco/completion/hidden_extent.h>
 #include <paco/completion/turn_ensemble.h>
@@ -26,11 +27,6 @@ const char kFormatKey[] = "paco_extent_head_format";
 torch::nn::Sequential makeMlp(int features, int hidden) {
   return torch::nn::Sequential(torch::nn::Linear(features, hidden), torch::nn::GELU(), torch::nn::Dropout(0.2),
                                torch::nn::Linear(hidden, kBoxSides), torch::nn::Softplus());
-}
-
-std::uint64_t fnv1a(std::uint64_t hash, const std::string& text) {
-  for (unsigned char c : text) hash = (hash ^ c) * 1099511628211ULL;
-  return hash;
 }
 
 torch::Tensor featureMatrix(const std::vector<ExtentExample>& examples, int width) {
@@ -168,10 +164,10 @@ HiddenExtentModel::ConstPtr HiddenExtentModel::load(const std::string& path) {
 std::uint64_t networkFingerprint(const CompletionModel& model) {
   auto& impl = *model.impl();
   std::lock_guard<std::mutex> lock(impl.mutex);
-  std::uint64_t hash = 14695981039346656037ULL;
-  for (const auto& [name, crc] : weightChecksums(*impl.encoder)) hash = fnv1a(hash, "encoder." + name + std::to_string(crc));
+  std::uint64_t hash = kFnv1aOffsetBasis;
+  for (const auto& [name, crc] : weightChecksums(*impl.encoder)) hash = fnv1a("encoder." + name + std::to_string(crc), hash);
   for (const auto& [name, crc] : weightChecksums(*detail::decoderOf(impl)))
-    hash = fnv1a(hash, "decoder." + name + std::to_string(crc));
+    hash = fnv1a("decoder." + name + std::to_string(crc), hash);
   return hash;
 }
 

@@ -3,6 +3,7 @@
 #include "format.h"
 
 #include <paco/common/error.h>
+#include <paco/common/hash.h>
 #include <paco/common/scan_shares.h>
 #include <paco/io/mesh_io.h>
 
@@ -43,14 +44,7 @@ Split splitFromString(const std::string& name) {
   throw InvalidInputError("unknown split '" + name + "': use train, val or test");
 }
 
-std::uint64_t fnv1a64(const std::string& text) {
-  std::uint64_t hash = 14695981039346656037ull;
-  for (unsigned char c : text) {
-    hash ^= c;
-    hash *= 1099511628211ull;
-  }
-  return hash;
-}
+std::uint64_t fnv1a64(const std::string& text) { return fnv1a(text); }
 
 Split splitOf(const std::string& part_name) {
   const std::uint64_t bucket = fnv1a64(part_name) % 100;
