@@ -576,6 +576,43 @@ TEST(PolyFit, TheWarmStartIsMadeFromThePlanesTheBudgetKeeps) {
           << "face " << f << " lies on the left-out notch plane " << k;
 }
 
+// A building seen from above: a densely covered roof, walls covered on their top 30 % only, a
+// floor and a small patch of an inner floor at the walls' lowest points. With a coverage weight
+// of 0.3, PolyFit prefers a slab of roof closed on the inner floor's plane to walls mostly without
+// points, and gives up the floor's points (18 % of all). Its warm start, the cell complex, keeps
+// the floor; the assembler returns that and says why. With 20 floor points (3 % of all) the start
+// is the slab too, and PolyFit's optimum stays.
+TEST(PolyFit, AnOptimumFarFromManyMorePointsThanItsStartReturnsTheStart) {
+  auto assembleBuilding = [](int floor_points, SurfaceMesh& mesh) {
+    std::mt19937 random(5);
+    const double top = 0.7;
+    std::vector<PlanarPrimitive> p;
+    p.push_back(paco::test::coveredAxisPlane(2, 1.0, 1.0, {0, 0, 1}, {1, 1, 1}, 300, random));
+    p.push_back(paco::test::coveredAxisPlane(2, 0.0, -1.0, {0, 0, 0}, {1, 1, 0}, floor_points, random));
+    p.push_back(paco::test::coveredAxisPlane(0, 0.0, -1.0, {0, 0, top}, {0, 1, 1}, 60, random));
+    p.push_back(paco::test::coveredAxisPlane(0, 1.0, 1.0, {1, 0, top}, {1, 1, 1}, 60, random));
+    p.push_back(paco::test::coveredAxisPlane(1, 0.0, -1.0, {0, 0, top}, {1, 0, 1}, 60, random));
+    p.push_back(paco::test::coveredAxisPlane(1, 1.0, 1.0, {0, 1, top}, {1, 1, 1}, 60, random));
+    p.push_back(paco::test::coveredAxisPlane(2, top, -1.0, {0.4, 0.4, top}, {0.6, 0.6, top}, 20, random));
+    paco::PolygonalAssembler assembler;
+    assembler.setInputPrimitives(p);
+    assembler.setCoverageWeight(0.3);
+    return assembler.reconstruct(mesh);
+  };
+  SurfaceMesh mesh;
+  const paco::AssemblyResult with_floor = assembleBuilding(120, mesh);
+  ASSERT_TRUE(with_floor.ok()) << paco::toString(with_floor.status) << ": " << with_floor.message;
+  EXPECT_TRUE(with_floor.returned_warm_start);
+  EXPECT_NE(with_floor.message.find("from 18 % of the primitives' points"), std::string::npos) << with_floor.message;
+  EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+  EXPECT_NEAR(paco::signedVolume(mesh), 1.0, 1e-3);
+
+  const paco::AssemblyResult little_floor = assembleBuilding(20, mesh);
+  ASSERT_TRUE(little_floor.ok()) << paco::toString(little_floor.status) << ": " << little_floor.message;
+  EXPECT_FALSE(little_floor.returned_warm_start) << little_floor.message;
+  EXPECT_NEAR(paco::signedVolume(mesh), 0.3, 1e-3);
+}
+
 // Points on a fifth of each face's width (4 % of its area, as a scanner's sparse patches): their
 // votes weigh less than the cube's area term, and the min-cut at the set smoothness labels every
 // cell outside. The assembler then labels with weaker smoothing and says so. PolyFit returns that

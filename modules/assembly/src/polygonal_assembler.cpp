@@ -2,6 +2,7 @@
 
 #include "backends.h"
 #include "mesh_cleanup.h"
+#include "point_coverage.h"
 
 #include <paco/common/angles.h>
 #include <paco/common/error.h>
@@ -15,6 +16,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <iomanip>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -27,6 +29,12 @@ namespace {
 // quarters: on large complexes (lattices of 36 planes, 2,000 cells) the start needs over 1 s of a
 // 2 s budget, and without it CBC finds nothing there; with it PolyFit can always return the start.
 constexpr double kWarmStartBudgetShare = 0.75;
+// PolyFit's optimum gives way to its warm start when it passes farther than kFarFromSurface (of
+// the diagonal) from a share of the primitives' points kMaxPointsGivenUp above the start's. On
+// 900 MFCAD validation cases the excess reached 0.097, and where it passed 0.04 the start was no
+// better (doc/assembly.md); a building seen from above whose walls PolyFit dropped had 0.33.
+constexpr double kFarFromSurface = 0.05;
+constexpr double kMaxPointsGivenUp = 0.10;
 
 double nowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -486,6 +494,32 @@ void PolygonalAssembler::performReconstruction(const std::vector<PlanarPrimitive
         result_.message = "PolyFit failed (" + why + "); the surface of its warm start (the cell complex) is returned.";
       result_.smoothness_used = start_smoothness;
       if (start_smoothness < smoothness_) result_.message += " " + loweredSmoothnessNote(smoothness_, start_smoothness);
+    }
+    // PolyFit's coverage term can outweigh the points of sparsely seen faces: a building scanned
+    // from above lost its walls and floor and became a slab of roof. When its optimum passes far
+    // from many more of the points than the start does, the start is the better surface.
+    if (outcome.status == AssemblyStatus::Success && !result_.returned_warm_start && !start_solid.faces.empty() &&
+        !interruptRequested()) {
+      std::vector<bool> left_out(separated.size(), false);
+      for (std::size_t j : outcome.dropped_for_budget) left_out[j] = true;
+      std::vector<PlanarPrimitive> kept;
+      for (std::size_t k = 0; k < separated.size(); ++k)
+        if (!left_out[k]) kept.push_back(separated[k]);
+      const double far_optimum = detail::shareOfPointsFartherThan(mesh, kept, kFarFromSurface);
+      const double far_start = detail::shareOfPointsFartherThan(start_solid, kept, kFarFromSurface);
+      if (far_optimum - far_start > kMaxPointsGivenUp) {
+        std::ostringstream why;
+        why << std::fixed << std::setprecision(0) << "PolyFit's optimum passes farther than " << 100 * kFarFromSurface
+            << " % of the diagonal from " << 100 * far_optimum << " % of the primitives' points, its warm start (the "
+            << "cell complex) from " << 100 * far_start
+            << " %: the start's surface is returned (PolyFit's coverage term outweighed the points of sparsely "
+               "covered faces; a lower coverage weight keeps them).";
+        mesh = start_solid;
+        result_.returned_warm_start = true;
+        result_.message = why.str();
+        result_.smoothness_used = start_smoothness;
+        if (start_smoothness < smoothness_) result_.message += " " + loweredSmoothnessNote(smoothness_, start_smoothness);
+      }
     }
     if (!outcome.dropped_for_budget.empty()) {
       // used_[j] is the j-th primitive kept by pre-processing, in input order.
