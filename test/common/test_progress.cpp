@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <string>
+#include <thread>
 
 TEST(ProgressBar, FormatsDurations) {
   EXPECT_EQ(paco::ProgressBar::formatDuration(1.25), "1.2 s");
@@ -31,6 +34,30 @@ TEST(ProgressBar, WritesCountRateAndFinalLineToNonTerminal) {
   EXPECT_NE(text.find("4/4 100%"), std::string::npos);
   EXPECT_NE(text.find("/s in "), std::string::npos);
   EXPECT_NE(text.find("loss 0.5"), std::string::npos);
+}
+
+// Into a log, a line every 10 % and one whenever the interval has passed since the last line.
+TEST(ProgressBar, WritesALineToANonTerminalWhenTheIntervalHasPassed) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    paco::ProgressBar bar("work", 1000, f, /*log_interval=*/0.5);
+    bar.advance();  // the 0 % line
+    bar.advance();  // same tenth, too soon: no line
+    std::this_thread::sleep_for(std::chrono::milliseconds(600));
+    bar.advance();  // same tenth, the interval passed: a line
+    bar.advance();  // too soon again
+  }  // the final line
+  std::rewind(f);
+  char buf[4096] = {0};
+  const std::size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+  std::fclose(f);
+  const std::string text(buf, n);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 3) << text;
+  EXPECT_NE(text.find(" 1/1000 "), std::string::npos) << text;
+  EXPECT_NE(text.find(" 3/1000 "), std::string::npos) << text;
+  EXPECT_EQ(text.find(" 2/1000 "), std::string::npos) << text;
+  EXPECT_NE(text.find(" 4/1000 "), std::string::npos) << text;
 }
 
 TEST(InterruptGuard, SigintSetsFlagInsteadOfKilling) {

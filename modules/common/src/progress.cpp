@@ -37,9 +37,9 @@ InterruptGuard::~InterruptGuard() {
   sigaction(SIGTERM, &g_old_term, nullptr);
 }
 
-ProgressBar::ProgressBar(std::string label, std::size_t total, std::FILE* stream)
+ProgressBar::ProgressBar(std::string label, std::size_t total, std::FILE* stream, double log_interval)
     : label_(std::move(label)), total_(total), stream_(stream),
-      is_terminal_(isatty(fileno(stream)) != 0),
+      is_terminal_(isatty(fileno(stream)) != 0), log_interval_(log_interval),
       start_(std::chrono::steady_clock::now()), last_draw_(start_) {}
 
 ProgressBar::~ProgressBar() { finish(); }
@@ -83,7 +83,8 @@ void ProgressBar::draw(bool final) {
     if (!final && std::chrono::duration<double>(now - last_draw_).count() < 0.1) return;
   } else {
     const int decile = static_cast<int>(fraction * 10);
-    if (!final && decile == last_decile_) return;
+    const bool overdue = std::chrono::duration<double>(now - last_draw_).count() >= log_interval_;
+    if (!final && decile == last_decile_ && !overdue) return;
     last_decile_ = decile;
   }
   last_draw_ = now;

@@ -13,10 +13,12 @@
 namespace paco {
 
 /// A one-line terminal progress bar with count, rate and ETA. Thread-safe; redraws at most
-/// ~10 times a second. On a non-terminal stream it prints a line every 10 % instead.
+/// ~10 times a second. On a non-terminal stream (a log file) it prints a line every 10 % instead,
+/// and at least every `log_interval` seconds while work goes on, so that an hour-long pass does
+/// not sit silent in its log between two tenths.
 class ProgressBar {
  public:
-  ProgressBar(std::string label, std::size_t total, std::FILE* stream = stderr);
+  ProgressBar(std::string label, std::size_t total, std::FILE* stream = stderr, double log_interval = 60.0);
   ~ProgressBar();
   void advance(std::size_t steps = 1);
   /// A short free-form status shown after the counters, e.g. "loss 0.31".
@@ -33,6 +35,7 @@ class ProgressBar {
   std::size_t done_ = 0;
   std::FILE* stream_;
   bool is_terminal_;
+  double log_interval_;
   bool finished_ = false;
   int last_decile_ = -1;
   std::string status_;
