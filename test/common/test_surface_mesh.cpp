@@ -89,6 +89,26 @@ TEST(SurfaceMesh, WeldMergesDuplicatedCorners) {
   EXPECT_TRUE(paco::analyseTopology(soup).isClosedManifold());
 }
 
+// Tolerance 0 merges exact duplicates only, also far from the origin, where a neighbour 1e-3 away
+// must stay; coordinates of 1e300 with a small tolerance merge as well (the cell index is clamped:
+// the sanitizer build found it overflowing).
+TEST(SurfaceMesh, WeldingMergesExactDuplicatesWithToleranceZeroAndFarFromTheOrigin) {
+  for (const double at : {0.0, 1e12}) {
+    SCOPED_TRACE(at);
+    paco::SurfaceMesh m;
+    m.vertices = {{at, 0, 0}, {at, 0, 0}, {at, 1, 0}, {at, 0, 1}, {at + 1e-3, 1, 1}};
+    m.faces = {{0, 2, 3}, {1, 3, 4}};
+    EXPECT_EQ(paco::weldVertices(m, 0.0), 1u);
+    ASSERT_EQ(m.vertices.size(), 4u);
+    EXPECT_EQ(m.faces[1][0], 0u);
+  }
+  paco::SurfaceMesh far;
+  far.vertices = {{1e300, 0, 0}, {1e300, 0, 0}, {-1e300, 0, 0}, {0, 1, 0}};
+  far.faces = {{0, 2, 3}, {1, 3, 2}};
+  EXPECT_EQ(paco::weldVertices(far, 1e-6), 1u);
+  EXPECT_EQ(far.vertices.size(), 3u);
+}
+
 TEST(SurfaceMesh, SamplingIsUniformByAreaAndDeterministic) {
   const auto m = box(1, 1, 4);  // side faces 4x larger than top and bottom
   const auto s1 = paco::sampleSurface(m, 20000, 7);

@@ -112,12 +112,26 @@ MeshTopology analyseTopology(const SurfaceMesh& mesh) {
 
 std::size_t weldVertices(SurfaceMesh& mesh, double tolerance) {
   if (mesh.vertices.empty()) return 0;
-  const double cell = std::max(tolerance, 1e-300);
+  // Any cell size finds the vertices within `tolerance` (the distance test below decides); the
+  // size only sets how many share a bucket. Tolerance 0 (exact duplicates) takes a thousandth of
+  // the extent: a cell of 1e-300 put every vertex in the few buckets of the clamped index below.
+  double cell = tolerance;
+  if (!(cell > 0.0)) {
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& p : mesh.vertices) box.extend(p);
+    const double extent = box.diagonal().norm();
+    cell = std::isfinite(extent) && extent > 0.0 ? extent / 1024.0 : 1.0;
+  }
   auto key_of = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
-    const auto q = [&](double c, int d) { return static_cast<std::int64_t>(std::floor(c / cell)) + d; };
-    const std::int64_t x = q(p.x(), dx), y = q(p.y(), dy), z = q(p.z(), dz);
-    return static_cast<std::uint64_t>(x * 73856093) ^ static_cast<std::uint64_t>(y * 19349663) ^
-           static_cast<std::uint64_t>(z * 83492791);
+    // The cell index is clamped (and NaN taken as 0) so that converting it and adding the offset
+    // stay defined for any coordinate; far cells then share a key, which only costs time. The
+    // hash multiplies unsigned, which wraps.
+    const auto q = [&](double c, int d) {
+      double index = std::floor(c / cell);
+      index = std::isnan(index) ? 0.0 : std::clamp(index, -0x1p62, 0x1p62);
+      return static_cast<std::uint64_t>(static_cast<std::int64_t>(index) + d);
+    };
+    return (q(p.x(), dx) * 73856093u) ^ (q(p.y(), dy) * 19349663u) ^ (q(p.z(), dz) * 83492791u);
   };
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
   std::vector<std::uint32_t> remap(mesh.vertices.size());
