@@ -84,9 +84,10 @@ struct AssemblyResult {
   /// polyfit: start faces around candidate edges that PolyFit's program forbids to the start
   /// (three planes through one line, or four selected faces at an edge), left to the solver.
   std::size_t num_warm_start_faces_released = 0;
-  /// polyfit: the solver found no solution (in time, or at all), or PolyFit's optimum was the
-  /// empty surface, and the warm start's surface (the cell complex on the same planes) was
-  /// returned instead; `message` says why.
+  /// polyfit: the solver found no solution (in time, or at all), PolyFit's optimum was the empty
+  /// surface, or it passed far (5 % of the diagonal) from a share of the points at least 10 points
+  /// of percentage above the start's; the warm start's surface (the cell complex on the same
+  /// planes) was returned instead, and `message` says why.
   bool returned_warm_start = false;
   MeshTopology topology;               ///< of the output mesh
   double seconds = 0.0;                ///< wall time of reconstruct()
