@@ -6,9 +6,9 @@
 // within kOnPlane of a plane is on it, and cells are only split by planes that leave vertices
 // further than that on both sides. Shared corners computed twice differ by ~1e-15 and are welded.
 #include "backends.h"
-#include "disjoint_sets.h"
 #include "mesh_cleanup.h"
 
+#include <paco/common/disjoint_sets.h>
 #include <paco/common/progress.h>
 
 // Boost.Graph's edge iterators trip GCC's -Wmaybe-uninitialized after inlining (a false positive

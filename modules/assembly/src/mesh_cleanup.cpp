@@ -1,6 +1,6 @@
 #include "mesh_cleanup.h"
 
-#include "disjoint_sets.h"
+#include <paco/common/disjoint_sets.h>
 
 #include <Eigen/Geometry>
 

@@ -1,3 +1,4 @@
+#include <paco/common/disjoint_sets.h>
 #include <paco/common/error.h>
 #include <paco/common/surface_mesh.h>
 
@@ -15,17 +16,6 @@
 namespace paco {
 
 namespace {
-// Union-find over dense indices, used for connected components and vertex fans.
-struct DisjointSets {
-  std::vector<std::size_t> parent;
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::size_t find(std::size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
-};
-
 // Uniform double in [0, 1) from 53 random bits: identical on every standard library, unlike
 // std::uniform_real_distribution, so a seed gives the same samples everywhere.
 double unitUniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
@@ -75,12 +65,12 @@ MeshTopology analyseTopology(const SurfaceMesh& mesh) {
       edges[{std::min(a, b), std::max(a, b)}].push_back({f, a < b});
     }
   }
-  DisjointSets face_sets(mesh.faces.size());
+  DisjointSets<std::size_t> face_sets(mesh.faces.size());
   for (const auto& [key, uses] : edges) {
     if (uses.size() == 1) ++t.boundary_edges;
     else if (uses.size() > 2) ++t.non_manifold_edges;
     else if (uses[0].forward == uses[1].forward) ++t.inconsistent_edges;
-    for (std::size_t k = 1; k < uses.size(); ++k) face_sets.unite(uses[0].face, uses[k].face);
+    for (std::size_t k = 1; k < uses.size(); ++k) face_sets.join(uses[0].face, uses[k].face);
   }
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) t.components += face_sets.find(f) == f;
 
@@ -100,9 +90,9 @@ MeshTopology analyseTopology(const SurfaceMesh& mesh) {
           by_neighbour[face[(j + face.size() - 1) % face.size()]].push_back(k);
         }
     }
-    DisjointSets fan(fs.size());
+    DisjointSets<std::size_t> fan(fs.size());
     for (const auto& [w, ks] : by_neighbour)
-      for (std::size_t k = 1; k < ks.size(); ++k) fan.unite(ks[0], ks[k]);
+      for (std::size_t k = 1; k < ks.size(); ++k) fan.join(ks[0], ks[k]);
     std::size_t fans = 0;
     for (std::size_t k = 0; k < fs.size(); ++k) fans += fan.find(k) == k;
     if (fans > 1) ++t.non_manifold_vertices;

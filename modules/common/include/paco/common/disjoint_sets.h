@@ -1,11 +1,12 @@
 #pragma once
 // Disjoint sets of the indices 0..n-1 (union-find with path halving), for grouping faces or cells
-// that touch: the clean-up's coplanar faces, the cell complex's inside groups.
+// that touch: a mesh's components and vertex fans, the clean-up's coplanar faces, the cell
+// complex's inside groups.
 #include <cstddef>
 #include <numeric>
 #include <vector>
 
-namespace paco::detail {
+namespace paco {
 
 template <typename Index>
 class DisjointSets {
@@ -24,4 +25,4 @@ class DisjointSets {
   std::vector<Index> parent_;
 };
 
-}  // namespace paco::detail
+}  // namespace paco
