@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <numeric>
 #include <unordered_map>
@@ -180,13 +179,15 @@ void splitNonManifold(SurfaceMesh& mesh) {
   std::vector<Rename> renames;
   const std::size_t num_vertices = mesh.vertices.size();
   for (std::uint32_t v = 0; v < num_vertices; ++v) {
-    const auto& fs = faces_of[v];
+    // A face that lists v twice appears here once: the groups are of faces, not of corners.
+    std::vector<std::uint32_t> fs = faces_of[v];
+    std::sort(fs.begin(), fs.end());
+    fs.erase(std::unique(fs.begin(), fs.end()), fs.end());
     if (fs.size() < 2) continue;
-    std::map<std::uint32_t, std::uint32_t> parent;
-    for (std::uint32_t f : fs) parent[f] = f;
-    std::function<std::uint32_t(std::uint32_t)> find = [&](std::uint32_t x) {
-      return parent[x] == x ? x : parent[x] = find(parent[x]);
+    const auto slot = [&fs](std::uint32_t f) {
+      return static_cast<std::size_t>(std::lower_bound(fs.begin(), fs.end(), f) - fs.begin());
     };
+    DisjointSets<std::size_t> fans(fs.size());
     for (std::uint32_t f : fs) {
       const auto& face = mesh.faces[f];
       for (std::size_t i = 0; i < face.size(); ++i) {
@@ -194,12 +195,14 @@ void splitNonManifold(SurfaceMesh& mesh) {
         for (std::uint32_t other : {face[(i + 1) % face.size()], face[(i + face.size() - 1) % face.size()]}) {
           const EdgeKey edge{std::min(v, other), std::max(v, other)};
           const auto it = partner.find({edge, f});
-          if (it != partner.end() && parent.count(it->second)) parent[find(f)] = find(it->second);
+          if (it == partner.end()) continue;
+          const std::size_t there = slot(it->second);
+          if (there < fs.size() && fs[there] == it->second) fans.join(slot(f), there);
         }
       }
     }
-    std::map<std::uint32_t, std::vector<std::uint32_t>> groups;
-    for (std::uint32_t f : fs) groups[find(f)].push_back(f);
+    std::map<std::size_t, std::vector<std::uint32_t>> groups;
+    for (std::uint32_t f : fs) groups[fans.find(slot(f))].push_back(f);
     if (groups.size() < 2) continue;
     bool first = true;
     for (const auto& [root, members] : groups) {
