@@ -172,7 +172,8 @@ struct ScanKnowledgeFlags {
          "doc/evaluation.md)")
         ("seen-from", po::value(&seen_from),
          "X,Y,Z: the direction towards a distant scanner (e.g. 0,0,1 for airborne LiDAR with Z up); completed "
-         "points it would have seen (off the scan's silhouette, or in front of what it saw) are dropped (with fusion)")
+         "points it would have seen (off the scan's silhouette, or in front of what it saw) are dropped, and the box "
+         "that closes the hidden side has its walls along the lines of sight (with fusion)")
         ("seen-from-point", po::value(&seen_from_point),
          "X,Y,Z: the scanner's position (e.g. 0,0,0 for a depth camera's own frame), for the same test along lines "
          "of sight through it (with fusion)")

@@ -222,3 +222,52 @@ TEST(Orientation, OnePlaneIsTurnedOntoItsNearestAxis) {
   EXPECT_TRUE((R * normal).isApprox(Eigen::Vector3d(0, 0, 1), 1e-9));
   EXPECT_TRUE(R.isApprox(R0.transpose(), 1e-9));
 }
+
+// A gable roof seen from above: two slopes at 20 degrees either side of a ridge that runs at 30
+// degrees to x. No two planes are perpendicular, so dominantPlaneAxes tilts its frame onto the
+// larger slope; around the lines of sight the frame is the vertical, the ridge and across it.
+TEST(Orientation, AroundTheLinesOfSightAGableRoofGivesTheVerticalAndItsRidge) {
+  const Eigen::Matrix3d heading = turn(30.0, Eigen::Vector3d(0, 0, 1));
+  const Eigen::Vector3d ridge = heading * Eigen::Vector3d(1, 0, 0);
+  const std::vector<Eigen::Vector3d> slopes = {turn(20.0, ridge) * Eigen::Vector3d(0, 0, 1),
+                                               turn(-20.0, ridge) * Eigen::Vector3d(0, 0, 1)};
+  const std::vector<double> sizes = {2100, 2000};
+  const auto tilted = paco::dominantPlaneAxes(slopes, sizes);
+  ASSERT_TRUE(tilted.has_value());
+  EXPECT_TRUE(tilted->col(0).isApprox(slopes[0], 1e-12));
+
+  const Eigen::Matrix3d axes = paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 5), slopes, sizes);
+  EXPECT_TRUE(axes.col(0).isApprox(Eigen::Vector3d(0, 0, 1), 1e-12)) << axes;
+  EXPECT_NEAR(std::abs(axes.col(1).dot(ridge)) + std::abs(axes.col(2).dot(ridge)), 1.0, 1e-12) << axes;
+  EXPECT_TRUE((axes.transpose() * axes).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+  EXPECT_NEAR(axes.determinant(), 1.0, 1e-12);
+  // The direction's sign is kept.
+  EXPECT_TRUE(paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, -1), slopes, sizes)
+                  .col(0)
+                  .isApprox(Eigen::Vector3d(0, 0, -1), 1e-12));
+}
+
+TEST(Orientation, AroundTheLinesOfSightWallsOutweighTheNoiseOfAFlatRoof) {
+  // A flat roof whose fit is 1 degree off (its projection's direction is noise, and ignored) and
+  // two small walls at 50 degrees to x.
+  const Eigen::Matrix3d heading = turn(50.0, Eigen::Vector3d(0, 0, 1));
+  const std::vector<Eigen::Vector3d> normals = {turn(1.0, Eigen::Vector3d(1, 1, 0)) * Eigen::Vector3d(0, 0, 1),
+                                                heading * Eigen::Vector3d(1, 0, 0),
+                                                heading * Eigen::Vector3d(0, 1, 0)};
+  const Eigen::Matrix3d axes = paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 1), normals, {5000, 20, 20});
+  EXPECT_TRUE(axes.col(0).isApprox(Eigen::Vector3d(0, 0, 1), 1e-12));
+  EXPECT_NEAR(std::abs(axes.col(1).dot(normals[1])), 1.0, 1e-12) << axes;
+  // The flat roof alone says nothing across the lines of sight: the coordinate axes are taken.
+  Eigen::Matrix3d vertical_x_y;
+  vertical_x_y << 0, 1, 0, 0, 0, 1, 1, 0, 0;  // columns z, x, y
+  const Eigen::Matrix3d roof_only = paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 1), {normals[0]}, {5000});
+  EXPECT_TRUE(roof_only.isApprox(vertical_x_y, 1e-12)) << roof_only;
+  EXPECT_TRUE(paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 1), {}, {}).isApprox(vertical_x_y, 1e-12));
+}
+
+TEST(Orientation, AroundRejectsAZeroAxisAndMismatchedLists) {
+  EXPECT_THROW(paco::dominantPlaneAxesAround(Eigen::Vector3d::Zero(), {}, {}), paco::InvalidInputError);
+  EXPECT_THROW(paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, std::nan("")), {}, {}), paco::InvalidInputError);
+  EXPECT_THROW(paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 1), {Eigen::Vector3d(1, 0, 0)}, {}),
+               paco::InvalidInputError);
+}

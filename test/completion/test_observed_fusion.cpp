@@ -2,6 +2,8 @@
 #include <paco/common/error.h>
 #include <paco/completion/observed_fusion.h>
 
+#include <Eigen/Geometry>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -774,6 +776,62 @@ TEST(ObservedFusion, CompletedPointsAScannerAtAPointWouldHaveSeenAreDropped) {
     options.scanner_cell = bad;
     EXPECT_THROW(fuseWithObserved(scan.completed, scan.observed, options), InvalidInputError);
   }
+}
+
+// An airborne scan of a gable roof: two slopes at 20 degrees either side of a ridge at height 1
+// that runs at 30 degrees to x, each 0.5 wide. No two seen planes are perpendicular, so without
+// the scanner the box takes the larger slope's normal as an axis and closes the hidden side with a
+// floor parallel to that slope. Seen from above, its walls run along the lines of sight (z) and
+// the ridge, and its floor is level under the lowest seen point.
+TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
+  const Eigen::Matrix3d heading = Eigen::AngleAxisd(degreesToRadians(30.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d ridge = heading * Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d across = heading * Eigen::Vector3d::UnitY();
+  const double slope = degreesToRadians(20.0);
+  std::vector<PlanarPrimitive> observed;
+  for (const double side : {-1.0, 1.0}) {
+    const Eigen::Vector3d normal = side * std::sin(slope) * across + std::cos(slope) * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d centre = 0.5 * ridge + (0.5 + 0.25 * side) * across +
+                                   (1.0 - 0.25 * std::tan(slope)) * Eigen::Vector3d::UnitZ();
+    observed.push_back(patch(Plane::fromPointAndNormal(centre, normal), centre, 0.5, 12, 1.0f));
+  }
+  observed[1].points.resize(120);  // the larger slope sets the frame without the scanner
+  double lowest = 1.0;
+  for (const auto& primitive : observed)
+    for (const auto& p : primitive.points) lowest = std::min(lowest, double(p.z));
+  const auto isOneOf = [](const Eigen::Vector3d& normal, std::initializer_list<Eigen::Vector3d> directions) {
+    for (const Eigen::Vector3d& d : directions)
+      if (std::abs(normal.normalized().dot(d)) > 1.0 - 1e-9) return true;
+    return false;
+  };
+  ObservedFusionOptions options;
+  options.unseen_point_fraction = 1.0;
+  options.contradiction_radius = 0.0;
+  ObservedFusionReport report;
+
+  const auto tilted = fuseWithObserved({}, observed, options, &report);
+  ASSERT_GT(report.filled_faces, 0u);
+  std::size_t parallel_to_the_slope = 0;
+  for (std::size_t i = 2; i < tilted.size(); ++i) {
+    EXPECT_FALSE(isOneOf(tilted[i].plane.normal, {Eigen::Vector3d::UnitZ()})) << tilted[i].plane.normal.transpose();
+    parallel_to_the_slope += isOneOf(tilted[i].plane.normal, {observed[0].plane.normal});
+  }
+  EXPECT_GT(parallel_to_the_slope, 0u);
+
+  options.scanner_direction = {0, 0, 1};
+  const auto level = fuseWithObserved({}, observed, options, &report);
+  ASSERT_GT(report.filled_faces, 0u);
+  ASSERT_EQ(level.size(), 2u + report.filled_faces);
+  bool floor = false;
+  for (std::size_t i = 2; i < level.size(); ++i) {
+    EXPECT_TRUE(isOneOf(level[i].plane.normal, {Eigen::Vector3d::UnitZ(), ridge, across}))
+        << level[i].plane.normal.transpose();
+    if (level[i].plane.normal.isApprox(-Eigen::Vector3d::UnitZ(), 1e-9)) {
+      floor = true;
+      EXPECT_NEAR(level[i].plane.signedDistance({0, 0, lowest}), 0.0, 1e-6);
+    }
+  }
+  EXPECT_TRUE(floor);
 }
 
 TEST(ObservedFusion, CoordinatesNear1e20DoNotCrashIt) {

@@ -91,6 +91,36 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
   return best;
 }
 
+Eigen::Matrix3d dominantPlaneAxesAround(const Eigen::Vector3d& axis, const std::vector<Eigen::Vector3d>& normals,
+                                        const std::vector<double>& weights, double tolerance_degrees) {
+  if (normals.size() != weights.size())
+    throw InvalidInputError("dominantPlaneAxesAround: " + std::to_string(normals.size()) + " normals but " +
+                            std::to_string(weights.size()) + " weights");
+  if (!axis.allFinite() || axis.norm() == 0.0)
+    throw InvalidInputError("dominantPlaneAxesAround: the axis must be finite and not zero");
+  const Eigen::Vector3d first = axis.normalized();
+  // `first` outweighs every plane, so each frame dominantPlaneAxes weighs has it as an axis: its
+  // pairs with a projection put it first, two perpendicular projections have it as their cross
+  // product, and the fallback frame starts from the largest plane.
+  std::vector<Eigen::Vector3d> directions = {first};
+  std::vector<double> direction_weights = {1.0};
+  const double min_length = std::sin(degreesToRadians(2.0));
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    if (!normals[i].allFinite() || normals[i].norm() == 0.0 || !(weights[i] > 0.0)) continue;
+    const Eigen::Vector3d unit = normals[i].normalized();
+    const Eigen::Vector3d across = unit - unit.dot(first) * first;
+    if (across.norm() < min_length) continue;
+    directions.push_back(across.normalized());
+    direction_weights.push_back(weights[i] * across.norm());
+    direction_weights[0] += weights[i];
+  }
+  const Eigen::Matrix3d axes = *dominantPlaneAxes(directions, direction_weights, tolerance_degrees);
+  // Put `first` in the first column, exactly and with its sign, keeping a proper rotation.
+  Eigen::Index column = 0;
+  (axes.transpose() * first).cwiseAbs().maxCoeff(&column);
+  return frameOf(first, axes.col((column + 1) % 3));
+}
+
 Eigen::Matrix3d rotationOntoAxesClosestToIdentity(const Eigen::Matrix3d& axes) {
   // R = P Aᵀ maps column j of A onto column j of the signed permutation P; det R = det P.
   std::array<int, 3> permutation = {0, 1, 2};

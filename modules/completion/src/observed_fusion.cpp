@@ -66,21 +66,29 @@ bool isTrusted(const PlanarPrimitive& segment, std::size_t min_points) {
 }
 
 // The unit normals of the trusted observed segments and their sizes, and the dominant axes they
-// imply.
+// imply. With a distant scanner the axes hold its lines of sight (`scanner_direction`, zero when
+// unknown): everything between the scan and the scanner is empty, so the box that closes the hidden
+// side has its walls along the lines of sight and its far face across them. Tilted onto a seen
+// plane instead (a roof slope, when no two seen planes are perpendicular), the box closed an
+// airborne scan of a building with a sloping floor and a slab that stood above the roof.
 struct SeenNormals {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
   std::optional<Eigen::Matrix3d> axes;
 };
 
-SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_t min_points) {
+SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_t min_points,
+                        const Eigen::Vector3d& scanner_direction) {
   SeenNormals seen;
   for (const auto& segment : observed) {
     if (!isTrusted(segment, min_points)) continue;
     seen.normals.push_back(segment.plane.normal.normalized());
     seen.sizes.push_back(static_cast<double>(segment.points.size()));
   }
-  seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
+  if (scanner_direction.squaredNorm() > 0.0)
+    seen.axes = dominantPlaneAxesAround(scanner_direction, seen.normals, seen.sizes);
+  else
+    seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
   return seen;
 }
 
@@ -899,7 +907,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     shown_of[c] = shown.size();
     shown.push_back(std::move(network_part));
   }
-  const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points);
+  const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points, options.scanner_direction);
   if (options.align_unseen_degrees > 0.0) {
     const auto directions = seenDirections(seen_normals);
     const double max_align = degreesToRadians(options.align_unseen_degrees);

@@ -30,6 +30,18 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
                                                  const std::vector<double>& weights,
                                                  double tolerance_degrees = 10.0);
 
+/// Orthonormal axes (the columns, a proper rotation) whose first column is `axis` (normalised, any
+/// length but zero) and whose other two follow the planes: each normal is projected perpendicular
+/// to `axis`, weighted by its weight times the projection's length (a plane nearly perpendicular
+/// to `axis` says little about the other two directions), and the two are chosen among those
+/// projections as dominantPlaneAxes chooses. Projections shorter than sin 2 degrees are ignored:
+/// their direction is noise. Without any, the coordinate axis least aligned with `axis` is the
+/// second. For a distant scanner whose lines of sight run along `axis`: a gable roof seen from
+/// above has no two perpendicular planes, and dominantPlaneAxes would tilt the frame onto one of its
+/// slopes. Throws InvalidInputError when the lists differ in length or `axis` is zero or not finite.
+Eigen::Matrix3d dominantPlaneAxesAround(const Eigen::Vector3d& axis, const std::vector<Eigen::Vector3d>& normals,
+                                        const std::vector<double>& weights, double tolerance_degrees = 10.0);
+
 /// Of the 24 rotations that take the columns of `axes` (a proper rotation) onto the coordinate
 /// axes, up to order and sign, the one closest to the identity (largest trace): a scan whose
 /// dominant faces are already axis-aligned is left as it is.

@@ -121,6 +121,9 @@ struct ObservedFusionOptions {
   /// otherwise guesses: on a sparse roof scan it reached 2.6 times the building's width
   /// (doc/results.md). Only the segments' points count as seen, so a scan with much clutter that
   /// the segmenter left out may lose completed points there.
+  /// A distant scanner's direction is also an axis of the box the fill closes
+  /// (paco::dominantPlaneAxesAround): its walls run along the lines of sight and its far face
+  /// across them, where the seen planes alone could tilt it onto a roof slope.
   Eigen::Vector3d scanner_direction = Eigen::Vector3d::Zero();
   std::optional<Eigen::Vector3d> scanner_position;
   /// Width of a line of sight for the test above, a fraction of the observed points' diagonal
