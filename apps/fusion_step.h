@@ -307,6 +307,10 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
               : knowledge.extent_head.empty() ? " (box fill to the known extent)"
                                               : " (box fill to the guessed extent)",
               describe(report).c_str());
+  if (report.box_on_one_plane && report.filled_points > 0 && !knowledge.scanner_position)
+    std::printf("  note: no two seen planes are perpendicular, so the box that closes the hidden side is turned onto "
+                "the largest seen plane; if the scanner looked from one direction (airborne LiDAR with Z up: "
+                "--seen-from 0,0,1), say so, and the box's walls follow its lines of sight\n");
 }
 
 }  // namespace paco::app

@@ -541,6 +541,42 @@ TEST(PacoReconstruct, ReportsPrimitivesLeftOutForTheCandidateFaceBudget) {
   EXPECT_EQ(log.find(" 0 least confident left out"), std::string::npos) << log;
   EXPECT_TRUE(paco::analyseTopology(paco::io::loadMesh(dir.file("part.obj"))).isClosedManifold());
 }
+
+// A gable roof seen from above (two slopes at 25 degrees, 10 x 6 m, nothing else): no two seen
+// planes are perpendicular, so the box fill's box lies on one slope, and the tool says that
+// --seen-from would set its walls along the lines of sight. With it, the note is gone.
+TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirection) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  paco::io::LabelledCloud roof;
+  roof.has_normals = true;
+  const double slope = paco::degreesToRadians(25.0);
+  for (const double side : {-1.0, 1.0})
+    for (int i = 0; i < 40; ++i)
+      for (int j = 0; j < 20; ++j) {
+        const double across = side * 3.0 * (j + 0.5) / 20.0;  // from the ridge (y = 0) to an eave
+        pcl::PointNormal p;
+        p.x = static_cast<float>(10.0 * (i + 0.5) / 40.0);
+        p.y = static_cast<float>(across);
+        p.z = static_cast<float>(5.0 - std::abs(across) * std::tan(slope));
+        p.normal_x = 0.0f;
+        p.normal_y = static_cast<float>(side * std::sin(slope));
+        p.normal_z = static_cast<float>(std::cos(slope));
+        roof.points.push_back(p);
+      }
+  paco::io::saveCloud(dir.file("roof.ply"), roof);
+  const std::string base = tool() + " " + quoted(dir.file("roof.ply")) + " --model " + quoted(dir.file("tiny.pt")) +
+                           " --assembler cell-complex -o " + quoted(dir.file("roof.obj"));
+  const std::string note = "no two seen planes are perpendicular, so the box that closes the hidden side";
+  std::string log;
+  ASSERT_EQ(paco::test::runCommand(base, &log), 0) << log;
+  EXPECT_NE(log.find(note), std::string::npos) << log;
+  EXPECT_NE(log.find("--seen-from 0,0,1), say so"), std::string::npos) << log;
+  ASSERT_EQ(paco::test::runCommand(base + " --seen-from 0,0,1", &log), 0) << log;
+  EXPECT_EQ(log.find(note), std::string::npos) << log;
+  EXPECT_EQ(log.find("no two seen planes are perpendicular"), std::string::npos) << log;
+}
 #endif
 
 TEST(PacoReconstruct, TruncatedInputFailsWithoutOutputs) {

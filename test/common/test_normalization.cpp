@@ -236,6 +236,14 @@ TEST(Orientation, AroundTheLinesOfSightAGableRoofGivesTheVerticalAndItsRidge) {
   ASSERT_TRUE(tilted.has_value());
   EXPECT_TRUE(tilted->col(0).isApprox(slopes[0], 1e-12));
 
+  EXPECT_FALSE(paco::hasPerpendicularPlanes(slopes, sizes));
+  // A wall along the ridge is perpendicular to neither slope (it is 70 degrees from each); one
+  // across it is perpendicular to both.
+  EXPECT_FALSE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], heading * Eigen::Vector3d(0, 1, 0)}, {2100, 2000, 10}));
+  EXPECT_TRUE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], ridge}, {2100, 2000, 10}));
+  EXPECT_FALSE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], ridge}, {2100, 2000, 0}));  // no weight
+  EXPECT_THROW(paco::hasPerpendicularPlanes(slopes, {1.0}), paco::InvalidInputError);
+
   const Eigen::Matrix3d axes = paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 5), slopes, sizes);
   EXPECT_TRUE(axes.col(0).isApprox(Eigen::Vector3d(0, 0, 1), 1e-12)) << axes;
   EXPECT_NEAR(std::abs(axes.col(1).dot(ridge)) + std::abs(axes.col(2).dot(ridge)), 1.0, 1e-12) << axes;

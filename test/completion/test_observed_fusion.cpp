@@ -811,6 +811,10 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
 
   const auto tilted = fuseWithObserved({}, observed, options, &report);
   ASSERT_GT(report.filled_faces, 0u);
+  EXPECT_TRUE(report.box_on_one_plane);
+  EXPECT_NE(describe(report).find("no two seen planes are perpendicular, so the box lies on the largest one"),
+            std::string::npos)
+      << describe(report);
   std::size_t parallel_to_the_slope = 0;
   for (std::size_t i = 2; i < tilted.size(); ++i) {
     EXPECT_FALSE(isOneOf(tilted[i].plane.normal, {Eigen::Vector3d::UnitZ()})) << tilted[i].plane.normal.transpose();
@@ -821,6 +825,7 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
   options.scanner_direction = {0, 0, 1};
   const auto level = fuseWithObserved({}, observed, options, &report);
   ASSERT_GT(report.filled_faces, 0u);
+  EXPECT_FALSE(report.box_on_one_plane);
   ASSERT_EQ(level.size(), 2u + report.filled_faces);
   bool floor = false;
   for (std::size_t i = 2; i < level.size(); ++i) {

@@ -23,19 +23,41 @@ Eigen::Matrix3d frameOf(const Eigen::Vector3d& first, const Eigen::Vector3d& sec
   return axes;
 }
 
+constexpr std::size_t kFrameCandidates = 64;
+
+// The planes that count (a finite, non-zero normal and a positive weight), heaviest first; stable,
+// so that equal weights keep the given order and the result is reproducible.
+std::vector<std::size_t> heaviestFirst(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights) {
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < normals.size(); ++i)
+    if (normals[i].allFinite() && normals[i].norm() > 0.0 && weights[i] > 0.0) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
+  return order;
+}
+
 }  // namespace
+
+bool hasPerpendicularPlanes(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
+                            double tolerance_degrees) {
+  if (normals.size() != weights.size())
+    throw InvalidInputError("hasPerpendicularPlanes: " + std::to_string(normals.size()) + " normals but " +
+                            std::to_string(weights.size()) + " weights");
+  std::vector<std::size_t> order = heaviestFirst(normals, weights);
+  if (order.size() > kFrameCandidates) order.resize(kFrameCandidates);
+  const double max_cosine = std::sin(degreesToRadians(tolerance_degrees));
+  for (std::size_t a = 0; a < order.size(); ++a)
+    for (std::size_t b = a + 1; b < order.size(); ++b)
+      if (std::abs(normals[order[a]].normalized().dot(normals[order[b]].normalized())) <= max_cosine) return true;
+  return false;
+}
 
 std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector3d>& normals,
                                                  const std::vector<double>& weights, double tolerance_degrees) {
   if (normals.size() != weights.size())
     throw InvalidInputError("dominantPlaneAxes: " + std::to_string(normals.size()) + " normals but " +
                             std::to_string(weights.size()) + " weights");
-  std::vector<std::size_t> order;
-  for (std::size_t i = 0; i < normals.size(); ++i)
-    if (normals[i].allFinite() && normals[i].norm() > 0.0 && weights[i] > 0.0) order.push_back(i);
+  const std::vector<std::size_t> order = heaviestFirst(normals, weights);
   if (order.empty()) return std::nullopt;
-  // Stable: equal weights keep the given order, so the result is reproducible.
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return weights[a] > weights[b]; });
   std::vector<Eigen::Vector3d> unit;
   for (std::size_t i : order) unit.push_back(normals[i].normalized());
   const double radians = degreesToRadians(tolerance_degrees);
@@ -68,7 +90,7 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
   // seen face although most of the part lies on the axes the chamfer cuts.
   // Frames from the 64 largest planes only: the search grows with the cube of their number, and a
   // real scan can have hundreds of small segments.
-  const std::size_t candidates = std::min<std::size_t>(unit.size(), 64);
+  const std::size_t candidates = std::min(unit.size(), kFrameCandidates);
   std::optional<Eigen::Matrix3d> best;
   double best_support = -1.0;
   for (std::size_t a = 0; a < candidates; ++a)

@@ -75,6 +75,7 @@ struct SeenNormals {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
   std::optional<Eigen::Matrix3d> axes;
+  bool axes_on_one_plane = false;  // no scanner direction, and no two seen planes perpendicular
 };
 
 SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_t min_points,
@@ -87,8 +88,10 @@ SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_
   }
   if (scanner_direction.squaredNorm() > 0.0)
     seen.axes = dominantPlaneAxesAround(scanner_direction, seen.normals, seen.sizes);
-  else
+  else {
     seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
+    seen.axes_on_one_plane = seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes);
+  }
   return seen;
 }
 
@@ -748,6 +751,7 @@ std::string describe(const ObservedFusionReport& report) {
                                      (report.box_faces_taken ? ", " + std::to_string(report.box_faces_taken) +
                                                                    " unseen primitives turned onto a box face"
                                                              : "") +
+                                     (report.box_on_one_plane ? "; no two seen planes are perpendicular, so the box lies on the largest one" : "") +
                                      ")"
                                : "") +
          (report.fill_in_seen_free_space ? ", " + std::to_string(report.fill_in_seen_free_space) +
@@ -915,6 +919,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       if (!snapped[c] && !absorbed[c] && alignWithNearest(completed[c], directions, max_align)) ++counts.aligned;
   }
   SeenBox seen_box = seenBox(observed, seen_normals);
+  counts.box_on_one_plane = seen_normals.axes_on_one_plane;
   if (!seen_box.box.isEmpty())
     for (const Eigen::Vector3d& p : options.known_extent_points) seen_box.box.extend(seen_box.axes.transpose() * p);
   std::vector<bool> clipped(completed.size(), false);

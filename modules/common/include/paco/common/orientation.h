@@ -30,6 +30,12 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
                                                  const std::vector<double>& weights,
                                                  double tolerance_degrees = 10.0);
 
+/// True when two of the planes (zero, non-finite or non-positive weights ignored, the 64 heaviest
+/// only, as dominantPlaneAxes) are within `tolerance_degrees` of perpendicular: without such a
+/// pair, dominantPlaneAxes falls back to the largest plane and a coordinate axis.
+bool hasPerpendicularPlanes(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
+                            double tolerance_degrees = 10.0);
+
 /// Orthonormal axes (the columns, a proper rotation) whose first column is `axis` (normalised, any
 /// length but zero) and whose other two follow the planes: each normal is projected perpendicular
 /// to `axis`, weighted by its weight times the projection's length (a plane nearly perpendicular
