@@ -239,7 +239,8 @@ TEST(Orientation, AroundTheLinesOfSightAGableRoofGivesTheVerticalAndItsRidge) {
   EXPECT_FALSE(paco::hasPerpendicularPlanes(slopes, sizes));
   // A wall along the ridge is perpendicular to neither slope (it is 70 degrees from each); one
   // across it is perpendicular to both.
-  EXPECT_FALSE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], heading * Eigen::Vector3d(0, 1, 0)}, {2100, 2000, 10}));
+  const Eigen::Vector3d along_the_ridge = heading * Eigen::Vector3d(0, 1, 0);  // the wall's normal
+  EXPECT_FALSE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], along_the_ridge}, {2100, 2000, 10}));
   EXPECT_TRUE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], ridge}, {2100, 2000, 10}));
   EXPECT_FALSE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], ridge}, {2100, 2000, 0}));  // no weight
   EXPECT_THROW(paco::hasPerpendicularPlanes(slopes, {1.0}), paco::InvalidInputError);

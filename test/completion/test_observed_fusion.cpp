@@ -784,7 +784,8 @@ TEST(ObservedFusion, CompletedPointsAScannerAtAPointWouldHaveSeenAreDropped) {
 // floor parallel to that slope. Seen from above, its walls run along the lines of sight (z) and
 // the ridge, and its floor is level under the lowest seen point.
 TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
-  const Eigen::Matrix3d heading = Eigen::AngleAxisd(degreesToRadians(30.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d heading =
+      Eigen::AngleAxisd(degreesToRadians(30.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d ridge = heading * Eigen::Vector3d::UnitX();
   const Eigen::Vector3d across = heading * Eigen::Vector3d::UnitY();
   const double slope = degreesToRadians(20.0);

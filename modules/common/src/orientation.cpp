@@ -27,7 +27,8 @@ constexpr std::size_t kFrameCandidates = 64;
 
 // The planes that count (a finite, non-zero normal and a positive weight), heaviest first; stable,
 // so that equal weights keep the given order and the result is reproducible.
-std::vector<std::size_t> heaviestFirst(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights) {
+std::vector<std::size_t> heaviestFirst(const std::vector<Eigen::Vector3d>& normals,
+                                       const std::vector<double>& weights) {
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < normals.size(); ++i)
     if (normals[i].allFinite() && normals[i].norm() > 0.0 && weights[i] > 0.0) order.push_back(i);

@@ -751,7 +751,9 @@ std::string describe(const ObservedFusionReport& report) {
                                      (report.box_faces_taken ? ", " + std::to_string(report.box_faces_taken) +
                                                                    " unseen primitives turned onto a box face"
                                                              : "") +
-                                     (report.box_on_one_plane ? "; no two seen planes are perpendicular, so the box lies on the largest one" : "") +
+                                     (report.box_on_one_plane
+                                          ? "; no two seen planes are perpendicular, so the box lies on the largest one"
+                                          : "") +
                                      ")"
                                : "") +
          (report.fill_in_seen_free_space ? ", " + std::to_string(report.fill_in_seen_free_space) +
