@@ -12,6 +12,11 @@ function(paco_add_module)
   target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_definitions(${target} PRIVATE ${ARG_PRIVATE_DEFINITIONS})
   paco_set_warnings(${target})
+  # A sanitized static library needs the sanitizer's runtime wherever it is linked: installed, it
+  # tells a consumer project so (without it the consumer fails to link, on __asan_* symbols).
+  if(PACO_SANITIZE)
+    target_link_options(${target} INTERFACE -fsanitize=${PACO_SANITIZE})
+  endif()
   install(TARGETS ${target} EXPORT pacoTargets
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}

@@ -822,6 +822,13 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
     parallel_to_the_slope += isOneOf(tilted[i].plane.normal, {observed[0].plane.normal});
   }
   EXPECT_GT(parallel_to_the_slope, 0u);
+  // One slope seen from both sides (parallel planes only, a plate): the box's first axis is sure.
+  PlanarPrimitive underside = observed[0];
+  underside.plane = Plane::fromPointAndNormal(underside.plane.foot() - 0.05 * underside.plane.normal,
+                                              -underside.plane.normal);
+  for (auto& p : underside.points) p.getVector3fMap() -= (0.05 * observed[0].plane.normal).cast<float>();
+  fuseWithObserved({}, {observed[0], underside}, options, &report);
+  EXPECT_FALSE(report.box_on_one_plane);
 
   options.scanner_direction = {0, 0, 1};
   const auto level = fuseWithObserved({}, observed, options, &report);

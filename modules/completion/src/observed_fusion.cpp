@@ -75,7 +75,7 @@ struct SeenNormals {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
   std::optional<Eigen::Matrix3d> axes;
-  bool axes_on_one_plane = false;  // no scanner direction, and no two seen planes perpendicular
+  bool axes_on_one_plane = false;  // no scanner direction; seen planes at an angle, but none perpendicular
 };
 
 SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_t min_points,
@@ -90,7 +90,16 @@ SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_
     seen.axes = dominantPlaneAxesAround(scanner_direction, seen.normals, seen.sizes);
   else {
     seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
-    seen.axes_on_one_plane = seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes);
+    // Parallel planes only (a plate seen on both sides, a flat roof) leave no doubt about the
+    // box's first axis; planes at an angle without a perpendicular pair do (a gable roof).
+    const auto atAnAngle = [&seen] {
+      const double max_cosine = std::cos(degreesToRadians(10.0));
+      for (std::size_t a = 0; a < seen.normals.size(); ++a)
+        for (std::size_t b = a + 1; b < seen.normals.size(); ++b)
+          if (std::abs(seen.normals[a].dot(seen.normals[b])) < max_cosine) return true;
+      return false;
+    };
+    seen.axes_on_one_plane = seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes) && atAnAngle();
   }
   return seen;
 }

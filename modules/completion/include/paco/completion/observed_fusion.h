@@ -153,10 +153,11 @@ struct ObservedFusionReport {
   std::size_t contradicted_points = 0;  ///< the network's points of seen faces the scan contradicts, dropped
   std::size_t seen_empty_points = 0;   ///< completed points the scanner would have seen, dropped (scanner_direction/position)
   std::size_t seen_empty = 0;          ///< unseen completed primitives dropped with them
-  /// No two seen planes are perpendicular and no scanner direction was given: the seen box lies on
-  /// the largest seen plane and a coordinate axis (paco::dominantPlaneAxes), so where the fill
-  /// closes the hidden side is a guess (a gable roof seen from above gets a box tilted onto one
-  /// slope; ObservedFusionOptions::scanner_direction sets the box's axes instead).
+  /// Seen planes meet at an angle but no two are perpendicular, and no scanner direction was given:
+  /// the seen box lies on the largest seen plane and a coordinate axis (paco::dominantPlaneAxes),
+  /// so where the fill closes the hidden side is a guess (a gable roof seen from above gets a box
+  /// tilted onto one slope; ObservedFusionOptions::scanner_direction sets the box's axes instead).
+  /// Parallel planes only (a plate seen on both sides) do not count.
   bool box_on_one_plane = false;
 };
 
