@@ -12,10 +12,14 @@ function(paco_add_module)
   target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_definitions(${target} PRIVATE ${ARG_PRIVATE_DEFINITIONS})
   paco_set_warnings(${target})
-  # A sanitized static library needs the sanitizer's runtime wherever it is linked: installed, it
-  # tells a consumer project so (without it the consumer fails to link, on __asan_* symbols).
+  # An installed sanitized library asks its consumers to build sanitized too. Linking needs the
+  # sanitizer's runtime (else undefined __asan_* symbols), and compiling needs the same Eigen:
+  # under AddressSanitizer Eigen aligns its own allocations, so a vector of PCL points allocated in
+  # paco and freed in unsanitized code is freed at the wrong address. In the build tree
+  # add_compile_options and add_link_options already apply.
   if(PACO_SANITIZE)
-    target_link_options(${target} INTERFACE -fsanitize=${PACO_SANITIZE})
+    target_compile_options(${target} INTERFACE $<INSTALL_INTERFACE:-fsanitize=${PACO_SANITIZE}>)
+    target_link_options(${target} INTERFACE $<INSTALL_INTERFACE:-fsanitize=${PACO_SANITIZE}>)
   endif()
   install(TARGETS ${target} EXPORT pacoTargets
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
