@@ -21,6 +21,8 @@
 #include <paco/io/vertex_groups_io.h>
 #include <paco/segmentation/planar_segmenter.h>
 
+#include <Eigen/Geometry>
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -542,13 +544,12 @@ TEST(PacoReconstruct, ReportsPrimitivesLeftOutForTheCandidateFaceBudget) {
   EXPECT_TRUE(paco::analyseTopology(paco::io::loadMesh(dir.file("part.obj"))).isClosedManifold());
 }
 
-// A gable roof seen from above (two slopes at 25 degrees, 10 x 6 m, nothing else): no two seen
-// planes are perpendicular, so the box fill's box lies on one slope, and the tool says that
-// --seen-from would set its walls along the lines of sight. With it, the note is gone.
-TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirection) {
-  TempDir dir;
-  paco::PacoNetwork network(paco::test::tinyModelConfig());
-  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+// A gable roof seen from above, and nothing else: two slopes at 25 degrees, 10 x 6 m, the ridge at
+// height 5 along x turned by `heading_degrees` about z, written to `path` with normals.
+void writeGableRoof(const std::string& path, double heading_degrees) {
+  const Eigen::Matrix3f heading =
+      Eigen::AngleAxisf(static_cast<float>(paco::degreesToRadians(heading_degrees)), Eigen::Vector3f::UnitZ())
+          .toRotationMatrix();
   paco::io::LabelledCloud roof;
   roof.has_normals = true;
   const double slope = paco::degreesToRadians(25.0);
@@ -557,15 +558,24 @@ TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirectio
       for (int j = 0; j < 20; ++j) {
         const double across = side * 3.0 * (j + 0.5) / 20.0;  // from the ridge (y = 0) to an eave
         pcl::PointNormal p;
-        p.x = static_cast<float>(10.0 * (i + 0.5) / 40.0);
-        p.y = static_cast<float>(across);
-        p.z = static_cast<float>(5.0 - std::abs(across) * std::tan(slope));
-        p.normal_x = 0.0f;
-        p.normal_y = static_cast<float>(side * std::sin(slope));
-        p.normal_z = static_cast<float>(std::cos(slope));
+        p.getVector3fMap() = heading * Eigen::Vector3f(static_cast<float>(10.0 * (i + 0.5) / 40.0),
+                                                       static_cast<float>(across),
+                                                       static_cast<float>(5.0 - std::abs(across) * std::tan(slope)));
+        p.getNormalVector3fMap() = heading * Eigen::Vector3f(0.0f, static_cast<float>(side * std::sin(slope)),
+                                                             static_cast<float>(std::cos(slope)));
         roof.points.push_back(p);
       }
-  paco::io::saveCloud(dir.file("roof.ply"), roof);
+  paco::io::saveCloud(path, roof);
+}
+
+// No two seen planes of the roof are perpendicular, so the box fill's box lies on one slope, and
+// the tool says that --seen-from would set its walls along the lines of sight. With it, the note
+// is gone.
+TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirection) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  writeGableRoof(dir.file("roof.ply"), 0.0);
   const std::string base = tool() + " " + quoted(dir.file("roof.ply")) + " --model " + quoted(dir.file("tiny.pt")) +
                            " --assembler cell-complex -o " + quoted(dir.file("roof.obj"));
   const std::string note = "no two seen planes are perpendicular, so the box that closes the hidden side";
@@ -576,6 +586,31 @@ TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirectio
   ASSERT_EQ(paco::test::runCommand(base + " --seen-from 0,0,1", &log), 0) << log;
   EXPECT_EQ(log.find(note), std::string::npos) << log;
   EXPECT_EQ(log.find("no two seen planes are perpendicular"), std::string::npos) << log;
+}
+
+// A --known-extent box lies on the input's axes and the fill's box on the seen faces': when they
+// differ (the roof turned by 30 degrees), the fill encloses the given box with a larger one, and
+// the tool says so and suggests points. A box on the seen axes, or points, draw no note.
+TEST(PacoReconstruct, AKnownExtentBoxOffTheSeenAxesIsNoted) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  paco::io::LabelledCloud ground;
+  ground.points.push_back(pcl::PointNormal());  // the origin: under the roof's first eave corner
+  paco::io::saveCloud(dir.file("ground.xyz"), ground);
+  const std::string note = "so it encloses the --known-extent box's corners with a larger box";
+  std::string log;
+  for (const double heading : {0.0, 30.0}) {
+    SCOPED_TRACE(heading);
+    writeGableRoof(dir.file("roof.ply"), heading);
+    const std::string base = tool() + " " + quoted(dir.file("roof.ply")) + " --model " + quoted(dir.file("tiny.pt")) +
+                             " --assembler cell-complex --seen-from 0,0,1 -o " + quoted(dir.file("roof.obj"));
+    ASSERT_EQ(paco::test::runCommand(base + " --known-extent -4,-4,0,11,11,5", &log), 0) << log;
+    EXPECT_EQ(log.find(note) != std::string::npos, heading > 0.0) << log;
+    if (heading > 0.0) EXPECT_NE(log.find("30.0 deg from the input's"), std::string::npos) << log;
+    ASSERT_EQ(paco::test::runCommand(base + " --known-extent " + quoted(dir.file("ground.xyz")), &log), 0) << log;
+    EXPECT_EQ(log.find(note), std::string::npos) << log;
+  }
 }
 #endif
 

@@ -931,6 +931,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   }
   SeenBox seen_box = seenBox(observed, seen_normals);
   counts.box_on_one_plane = seen_normals.axes_on_one_plane;
+  counts.box_axes = seen_box.axes;
   if (!seen_box.box.isEmpty())
     for (const Eigen::Vector3d& p : options.known_extent_points) seen_box.box.extend(seen_box.axes.transpose() * p);
   std::vector<bool> clipped(completed.size(), false);

@@ -159,6 +159,9 @@ struct ObservedFusionReport {
   /// tilted onto one slope; ObservedFusionOptions::scanner_direction sets the box's axes instead).
   /// Parallel planes only (a plate seen on both sides) do not count.
   bool box_on_one_plane = false;
+  /// The seen box's axes (the columns, a rotation), in the primitives' frame: a known extent is
+  /// enclosed by a box on these axes (known_extent_points).
+  Eigen::Matrix3d box_axes = Eigen::Matrix3d::Identity();
 };
 
 /// One line for logs: "N primitives took a seen plane, N duplicates absorbed, N seen faces added"
