@@ -244,6 +244,10 @@ TEST(Orientation, AroundTheLinesOfSightAGableRoofGivesTheVerticalAndItsRidge) {
   EXPECT_TRUE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], ridge}, {2100, 2000, 10}));
   EXPECT_FALSE(paco::hasPerpendicularPlanes({slopes[0], slopes[1], ridge}, {2100, 2000, 0}));  // no weight
   EXPECT_THROW(paco::hasPerpendicularPlanes(slopes, {1.0}), paco::InvalidInputError);
+  // The two slopes are 40 degrees apart; a slope and its own underside are parallel.
+  EXPECT_TRUE(paco::hasPlanesAtAnAngle(slopes, sizes));
+  EXPECT_FALSE(paco::hasPlanesAtAnAngle({slopes[0], -slopes[0]}, {2100, 50}));
+  EXPECT_THROW(paco::hasPlanesAtAnAngle(slopes, {1.0}), paco::InvalidInputError);
 
   const Eigen::Matrix3d axes = paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 5), slopes, sizes);
   EXPECT_TRUE(axes.col(0).isApprox(Eigen::Vector3d(0, 0, 1), 1e-12)) << axes;

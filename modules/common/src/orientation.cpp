@@ -36,27 +36,43 @@ std::vector<std::size_t> heaviestFirst(const std::vector<Eigen::Vector3d>& norma
   return order;
 }
 
+// True when some pair of the planes `order` lists satisfies `test(|cos|)` of their normals' angle.
+template <typename Test>
+bool anyPair(const std::vector<Eigen::Vector3d>& normals, const std::vector<std::size_t>& order, Test test) {
+  for (std::size_t a = 0; a < order.size(); ++a)
+    for (std::size_t b = a + 1; b < order.size(); ++b)
+      if (test(std::abs(normals[order[a]].normalized().dot(normals[order[b]].normalized())))) return true;
+  return false;
+}
+
+void checkSameLength(const char* function, const std::vector<Eigen::Vector3d>& normals,
+                     const std::vector<double>& weights) {
+  if (normals.size() != weights.size())
+    throw InvalidInputError(std::string(function) + ": " + std::to_string(normals.size()) + " normals but " +
+                            std::to_string(weights.size()) + " weights");
+}
+
 }  // namespace
+
+bool hasPlanesAtAnAngle(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
+                        double tolerance_degrees) {
+  checkSameLength("hasPlanesAtAnAngle", normals, weights);
+  const double min_cosine = std::cos(degreesToRadians(tolerance_degrees));
+  return anyPair(normals, heaviestFirst(normals, weights), [&](double cosine) { return cosine < min_cosine; });
+}
 
 bool hasPerpendicularPlanes(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
                             double tolerance_degrees) {
-  if (normals.size() != weights.size())
-    throw InvalidInputError("hasPerpendicularPlanes: " + std::to_string(normals.size()) + " normals but " +
-                            std::to_string(weights.size()) + " weights");
+  checkSameLength("hasPerpendicularPlanes", normals, weights);
   std::vector<std::size_t> order = heaviestFirst(normals, weights);
   if (order.size() > kFrameCandidates) order.resize(kFrameCandidates);
   const double max_cosine = std::sin(degreesToRadians(tolerance_degrees));
-  for (std::size_t a = 0; a < order.size(); ++a)
-    for (std::size_t b = a + 1; b < order.size(); ++b)
-      if (std::abs(normals[order[a]].normalized().dot(normals[order[b]].normalized())) <= max_cosine) return true;
-  return false;
+  return anyPair(normals, order, [&](double cosine) { return cosine <= max_cosine; });
 }
 
 std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector3d>& normals,
                                                  const std::vector<double>& weights, double tolerance_degrees) {
-  if (normals.size() != weights.size())
-    throw InvalidInputError("dominantPlaneAxes: " + std::to_string(normals.size()) + " normals but " +
-                            std::to_string(weights.size()) + " weights");
+  checkSameLength("dominantPlaneAxes", normals, weights);
   const std::vector<std::size_t> order = heaviestFirst(normals, weights);
   if (order.empty()) return std::nullopt;
   std::vector<Eigen::Vector3d> unit;
@@ -116,9 +132,7 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
 
 Eigen::Matrix3d dominantPlaneAxesAround(const Eigen::Vector3d& axis, const std::vector<Eigen::Vector3d>& normals,
                                         const std::vector<double>& weights, double tolerance_degrees) {
-  if (normals.size() != weights.size())
-    throw InvalidInputError("dominantPlaneAxesAround: " + std::to_string(normals.size()) + " normals but " +
-                            std::to_string(weights.size()) + " weights");
+  checkSameLength("dominantPlaneAxesAround", normals, weights);
   if (!axis.allFinite() || axis.norm() == 0.0)
     throw InvalidInputError("dominantPlaneAxesAround: the axis must be finite and not zero");
   const Eigen::Vector3d first = axis.normalized();

@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numeric>
 #include <unordered_map>
 
 namespace paco {
@@ -107,9 +106,9 @@ std::size_t weldVertices(SurfaceMesh& mesh, double tolerance) {
   // the extent: a cell of 1e-300 put every vertex in the few buckets of the clamped index below.
   double cell = tolerance;
   if (!(cell > 0.0)) {
-    Eigen::AlignedBox3d box;
-    for (const Eigen::Vector3d& p : mesh.vertices) box.extend(p);
-    const double extent = box.diagonal().norm();
+    Eigen::Vector3d lo, hi;
+    boundingBox(mesh, lo, hi);
+    const double extent = (hi - lo).norm();
     cell = std::isfinite(extent) && extent > 0.0 ? extent / 1024.0 : 1.0;
   }
   auto key_of = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {

@@ -92,14 +92,8 @@ SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_
     seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
     // Parallel planes only (a plate seen on both sides, a flat roof) leave no doubt about the
     // box's first axis; planes at an angle without a perpendicular pair do (a gable roof).
-    const auto atAnAngle = [&seen] {
-      const double max_cosine = std::cos(degreesToRadians(10.0));
-      for (std::size_t a = 0; a < seen.normals.size(); ++a)
-        for (std::size_t b = a + 1; b < seen.normals.size(); ++b)
-          if (std::abs(seen.normals[a].dot(seen.normals[b])) < max_cosine) return true;
-      return false;
-    };
-    seen.axes_on_one_plane = seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes) && atAnAngle();
+    seen.axes_on_one_plane = seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes) &&
+                             hasPlanesAtAnAngle(seen.normals, seen.sizes);
   }
   return seen;
 }

@@ -36,6 +36,12 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
 bool hasPerpendicularPlanes(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
                             double tolerance_degrees = 10.0);
 
+/// True when two of the planes (zero, non-finite or non-positive weights ignored; all of them) are
+/// more than `tolerance_degrees` from parallel: without such a pair every plane is parallel to the
+/// largest, and the first axis of dominantPlaneAxes is sure.
+bool hasPlanesAtAnAngle(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
+                        double tolerance_degrees = 10.0);
+
 /// Orthonormal axes (the columns, a proper rotation) whose first column is `axis` (normalised, any
 /// length but zero) and whose other two follow the planes: each normal is projected perpendicular
 /// to `axis`, weighted by its weight times the projection's length (a plane nearly perpendicular
