@@ -104,9 +104,9 @@ inline std::vector<double> parseNumbers(const std::string& option, const std::st
 }
 
 /// The points of --known-extent: the cloud in the file `text` names when it exists, else the
-/// corners of the box "X0,Y0,Z0,X1,Y1,Z1"; none for empty text. Throws UsageError unless the box
-/// is six finite numbers with X0 <= X1, Y0 <= Y1 and Z0 <= Z1, and IoError for a cloud file that
-/// cannot be read.
+/// point "X,Y,Z" or the corners of the box "X0,Y0,Z0,X1,Y1,Z1"; none for empty text. Throws
+/// UsageError unless the text is three or six finite numbers (a box with X0 <= X1, Y0 <= Y1 and
+/// Z0 <= Z1), and IoError for a cloud file that cannot be read.
 inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
   if (text.empty()) return {};
   if (std::filesystem::is_regular_file(text)) {
@@ -116,10 +116,16 @@ inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
     for (Eigen::Vector3d& p : points) p += cloud.coordinate_offset;  // the file's coordinates
     return points;
   }
-  const std::string form = "X0,Y0,Z0,X1,Y1,Z1 (a box) or an existing cloud file";
-  // Without a comma it cannot be a box: most likely a file name with a typo.
+  const std::string form = "X,Y,Z (a point), X0,Y0,Z0,X1,Y1,Z1 (a box) or an existing cloud file";
+  // Without a comma it cannot be a point or a box: most likely a file name with a typo.
   if (text.find(',') == std::string::npos)
     throw UsageError("--known-extent takes " + form + "; there is no file '" + text + "'");
+  // One point is enough where the scan stops short on one side only: the ground under an
+  // airborne scan's roof.
+  if (std::count(text.begin(), text.end(), ',') == 2) {
+    const std::vector<double> p = parseNumbers("--known-extent", form, text, 3);
+    return {Eigen::Vector3d(p[0], p[1], p[2])};
+  }
   const std::vector<double> values = parseNumbers("--known-extent", form, text, 6);
   const Eigen::AlignedBox3d box(Eigen::Vector3d(values[0], values[1], values[2]),
                                 Eigen::Vector3d(values[3], values[4], values[5]));
@@ -135,7 +141,7 @@ inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
 /// (scanner_direction / scanner_position / scanner_cell).
 struct ScanKnowledge {
   std::vector<Eigen::Vector3d> known_extent;
-  /// --known-extent was X0,Y0,Z0,X1,Y1,Z1: a box on the input's axes, not a file of points.
+  /// --known-extent was X0,Y0,Z0,X1,Y1,Z1: a box on the input's axes, not a point or a file of points.
   bool known_extent_is_box = false;
   /// --extent-head: a hidden-extent head whose guess becomes `known_extent` (guessHiddenExtent).
   std::string extent_head;
@@ -166,9 +172,10 @@ struct ScanKnowledgeFlags {
     namespace po = boost::program_options;
     options.add_options()
         ("known-extent", po::value(&known_extent),
-         "X0,Y0,Z0,X1,Y1,Z1 (a box), or a cloud file of points (e.g. a footprint's corners at ground and roof "
-         "height): where the object is known to reach, in the input's units and frame; the hidden side is closed "
-         "there instead of at the scan's box (with fusion)")
+         "X,Y,Z (a point, e.g. one on the ground under an airborne scan's roof), X0,Y0,Z0,X1,Y1,Z1 (a box), or a "
+         "cloud file of points (e.g. a footprint's corners at ground and roof height): where the object is known to "
+         "reach, in the input's units and frame; the hidden side is closed there instead of at the scan's box (with "
+         "fusion)")
         ("extent-head", po::value(&extent_head),
          "a hidden-extent head trained for the model (paco_train --extent-head-for), e.g. models/extent/mfcad_cube.pt for "
          "parts cut from a cube: the hidden side is closed where it guesses the object ends (with fusion; "
@@ -189,7 +196,7 @@ struct ScanKnowledgeFlags {
   ScanKnowledge parse() const {
     ScanKnowledge knowledge;
     knowledge.known_extent = parseKnownExtent(known_extent);
-    knowledge.known_extent_is_box = !known_extent.empty() && !std::filesystem::is_regular_file(known_extent);
+    knowledge.known_extent_is_box = knowledge.known_extent.size() > 1 && !std::filesystem::is_regular_file(known_extent);
     if (!extent_head.empty() && !known_extent.empty())
       throw UsageError("--extent-head guesses the extent that --known-extent gives: choose one");
     knowledge.extent_head = extent_head;
@@ -311,10 +318,12 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
               : knowledge.extent_head.empty() ? " (box fill to the known extent)"
                                               : " (box fill to the guessed extent)",
               describe(report).c_str());
-  if (report.box_on_one_plane && report.filled_points > 0 && !knowledge.scanner_position)
-    std::printf("  note: no two seen planes are perpendicular, so the box that closes the hidden side is turned onto "
-                "the largest seen plane; if the scanner looked from one direction (airborne LiDAR with Z up: "
-                "--seen-from 0,0,1), say so, and the box's walls follow its lines of sight\n");
+  if ((report.box_on_one_plane || report.box_on_mirror_pair) && report.filled_points > 0 && !knowledge.scanner_position)
+    std::printf("  note: no two seen planes are perpendicular, so the box that closes the hidden side %s; if the "
+                "scanner looked from one direction (airborne LiDAR with Z up: --seen-from 0,0,1), say so, and the "
+                "box's walls follow its lines of sight\n",
+                report.box_on_one_plane ? "is turned onto the largest seen plane"
+                                        : "lies on the bisectors of mirror-image seen planes (a roof's slopes)");
   if (knowledge.known_extent_is_box) {
     // The fill's box lies on the seen axes: turned from the input's, it encloses the corners of the
     // given box with a larger one (AHN3_02373 seen from above: 48.9 x 41.5 m for a 37.7 x 23.1 m

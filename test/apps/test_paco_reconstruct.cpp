@@ -488,11 +488,13 @@ TEST(PacoReconstruct, AKnownFootprintInOtherAxesClosesTheTurnedBox) {
 TEST(PacoReconstruct, AKnownExtentMustBeABoxOrACloud) {
   TempDir dir;
   std::string log;
-  // Anything but six finite numbers with X0 <= X1 is a usage error, and so is a known extent
-  // without the fusion that uses it.
+  // Anything but three finite numbers or six with X0 <= X1 is a usage error, and so is a known
+  // extent without the fusion that uses it.
   const std::string bad = tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("bad.obj")) + " --known-extent ";
-  EXPECT_EQ(paco::test::runCommand(bad + "1,2,3", &log), 2) << log;
-  EXPECT_NE(log.find("(6 numbers), got 3"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(bad + "1,2,3,4", &log), 2) << log;
+  EXPECT_NE(log.find("(6 numbers), got 4"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(bad + "1,2,nan", &log), 2) << log;
+  EXPECT_NE(log.find("'nan' in '1,2,nan' is not a finite number"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + "0,0,0,1,1,x", &log), 2) << log;
   EXPECT_NE(log.find("'x' in '0,0,0,1,1,x' is not a finite number"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(bad + quoted(dir.file("no_such_footprint.xyz")), &log), 2) << log;
@@ -568,9 +570,9 @@ void writeGableRoof(const std::string& path, double heading_degrees) {
   paco::io::saveCloud(path, roof);
 }
 
-// No two seen planes of the roof are perpendicular, so the box fill's box lies on one slope, and
-// the tool says that --seen-from would set its walls along the lines of sight. With it, the note
-// is gone.
+// No two seen planes of the roof are perpendicular, so the box fill's box is a guess (on the
+// slopes' bisectors), and the tool says that --seen-from would set its walls along the lines of
+// sight. With it, the note is gone.
 TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirection) {
   TempDir dir;
   paco::PacoNetwork network(paco::test::tinyModelConfig());
@@ -607,9 +609,33 @@ TEST(PacoReconstruct, AKnownExtentBoxOffTheSeenAxesIsNoted) {
                              " --assembler cell-complex --seen-from 0,0,1 -o " + quoted(dir.file("roof.obj"));
     ASSERT_EQ(paco::test::runCommand(base + " --known-extent -4,-4,0,11,11,5", &log), 0) << log;
     EXPECT_EQ(log.find(note) != std::string::npos, heading > 0.0) << log;
-    if (heading > 0.0) EXPECT_NE(log.find("30.0 deg from the input's"), std::string::npos) << log;
+    if (heading > 0.0) {
+      EXPECT_NE(log.find("30.0 deg from the input's"), std::string::npos) << log;
+    }
     ASSERT_EQ(paco::test::runCommand(base + " --known-extent " + quoted(dir.file("ground.xyz")), &log), 0) << log;
     EXPECT_EQ(log.find(note), std::string::npos) << log;
+    ASSERT_EQ(paco::test::runCommand(base + " --known-extent 0,0,0", &log), 0) << log;
+    EXPECT_EQ(log.find(note), std::string::npos) << log;
+  }
+}
+
+// One point on the ground, given as X,Y,Z: the roof seen from above closes down to it instead of
+// at its eaves (3.6 m). The network's guesses are left out (--threshold 1) so that the mesh is the
+// seen slopes and the fill alone.
+TEST(PacoReconstruct, AKnownPointOnTheGroundClosesARoofDownToIt) {
+  TempDir dir;
+  writeGableRoof(dir.file("roof.ply"), 30.0);
+  const std::string base = tool() + " " + quoted(dir.file("roof.ply")) + " --threshold 1 --seen-from 0,0,1 -o ";
+  std::string log;
+  for (const std::string& ground : {std::string(), std::string(" --known-extent 2,1,0.5")}) {
+    SCOPED_TRACE(ground);
+    ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("roof.obj")) + ground, &log), 0) << log;
+    const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("roof.obj"));
+    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold()) << log;
+    Eigen::Vector3d lo, hi;
+    paco::boundingBox(mesh, lo, hi);
+    EXPECT_NEAR(lo.z(), ground.empty() ? 5.0 - 3.0 * std::tan(paco::degreesToRadians(25.0)) : 0.5, 0.05) << log;
+    EXPECT_NEAR(hi.z(), 5.0, 0.05) << log;
   }
 }
 #endif

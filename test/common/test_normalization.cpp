@@ -278,6 +278,53 @@ TEST(Orientation, AroundTheLinesOfSightWallsOutweighTheNoiseOfAFlatRoof) {
   EXPECT_TRUE(paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, 1), {}, {}).isApprox(vertical_x_y, 1e-12));
 }
 
+namespace {
+// True when one of the columns of `axes` is `direction` (a unit vector), either way.
+bool hasAxis(const Eigen::Matrix3d& axes, const Eigen::Vector3d& direction) {
+  return (axes.transpose() * direction).cwiseAbs().maxCoeff() > 1.0 - 1e-9;
+}
+}  // namespace
+
+// The same gable roof without the lines of sight: its slopes are mirror images across the vertical
+// plane through the ridge, and their bisectors are the vertical and across the ridge. A hip roof's
+// four slopes, of different sizes and with one normal pointing inwards, give the same frame.
+TEST(Orientation, MirrorImageSlopesGiveTheVerticalAndTheRidge) {
+  const Eigen::Matrix3d heading = turn(30.0, Eigen::Vector3d(0, 0, 1));
+  const Eigen::Vector3d ridge = heading * Eigen::Vector3d(1, 0, 0);
+  const Eigen::Vector3d across = heading * Eigen::Vector3d(0, 1, 0);
+  const Eigen::Vector3d up(0, 0, 1);
+  const std::vector<Eigen::Vector3d> gable = {turn(20.0, ridge) * up, turn(-20.0, ridge) * up};
+  const auto axes = paco::mirrorPlaneAxes(gable, {2100, 2000});
+  ASSERT_TRUE(axes.has_value());
+  EXPECT_TRUE(hasAxis(*axes, up)) << *axes;
+  EXPECT_TRUE(hasAxis(*axes, ridge)) << *axes;
+  EXPECT_TRUE((axes->transpose() * *axes).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+  EXPECT_NEAR(axes->determinant(), 1.0, 1e-12);
+
+  const std::vector<Eigen::Vector3d> hip = {turn(20.0, ridge) * up, -(turn(-20.0, ridge) * up),
+                                            turn(35.0, across) * up, turn(-35.0, across) * up};
+  const auto hip_axes = paco::mirrorPlaneAxes(hip, {2100, 2000, 700, 650});
+  ASSERT_TRUE(hip_axes.has_value());
+  EXPECT_TRUE(hasAxis(*hip_axes, up) && hasAxis(*hip_axes, ridge)) << *hip_axes;
+}
+
+// A large face and a small chamfer at 45 degrees are mirror images across their bisector too, but
+// the frame belongs to the face: the chamfer's weight is all the pair brings. Two planes that are
+// perpendicular leave the frame to dominantPlaneAxes.
+TEST(Orientation, AChamferIsNoMirrorImageOfTheFaceItCuts) {
+  const Eigen::Vector3d face(0, 0, 1);
+  const Eigen::Vector3d chamfer = Eigen::Vector3d(0, 1, 1).normalized();
+  EXPECT_FALSE(paco::mirrorPlaneAxes({face, chamfer}, {1000, 100}).has_value());
+  // Equal in size, the two could be a roof's slopes.
+  const auto equal = paco::mirrorPlaneAxes({face, chamfer}, {1000, 1000});
+  ASSERT_TRUE(equal.has_value());
+  EXPECT_TRUE(hasAxis(*equal, (face + chamfer).normalized())) << *equal;
+  EXPECT_FALSE(paco::mirrorPlaneAxes({face, chamfer, Eigen::Vector3d(1, 0, 0)}, {1000, 1000, 10}).has_value());
+  EXPECT_FALSE(paco::mirrorPlaneAxes({face, -face}, {1000, 1000}).has_value());  // parallel only
+  EXPECT_FALSE(paco::mirrorPlaneAxes({}, {}).has_value());
+  EXPECT_THROW(paco::mirrorPlaneAxes({face}, {}), paco::InvalidInputError);
+}
+
 TEST(Orientation, AroundRejectsAZeroAxisAndMismatchedLists) {
   EXPECT_THROW(paco::dominantPlaneAxesAround(Eigen::Vector3d::Zero(), {}, {}), paco::InvalidInputError);
   EXPECT_THROW(paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, std::nan("")), {}, {}), paco::InvalidInputError);

@@ -779,10 +779,11 @@ TEST(ObservedFusion, CompletedPointsAScannerAtAPointWouldHaveSeenAreDropped) {
 }
 
 // An airborne scan of a gable roof: two slopes at 20 degrees either side of a ridge at height 1
-// that runs at 30 degrees to x, each 0.5 wide. No two seen planes are perpendicular, so without
-// the scanner the box takes the larger slope's normal as an axis and closes the hidden side with a
-// floor parallel to that slope. Seen from above, its walls run along the lines of sight (z) and
-// the ridge, and its floor is level under the lowest seen point.
+// that runs at 30 degrees to x, each 0.5 wide. No two seen planes are perpendicular. Seen from
+// above, the box's walls run along the lines of sight (z) and the ridge, and its floor is level
+// under the lowest seen point. Without the scanner, the slopes are mirror images of each other and
+// their bisectors give the same box; with one slope much smaller than the other, the box takes the
+// larger slope's normal as an axis and closes the hidden side with a floor parallel to that slope.
 TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
   const Eigen::Matrix3d heading =
       Eigen::AngleAxisd(degreesToRadians(30.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -796,7 +797,7 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
                                    (1.0 - 0.25 * std::tan(slope)) * Eigen::Vector3d::UnitZ();
     observed.push_back(patch(Plane::fromPointAndNormal(centre, normal), centre, 0.5, 12, 1.0f));
   }
-  observed[1].points.resize(120);  // the larger slope sets the frame without the scanner
+  observed[1].points.resize(120);
   double lowest = 1.0;
   for (const auto& primitive : observed)
     for (const auto& p : primitive.points) lowest = std::min(lowest, double(p.z));
@@ -805,14 +806,40 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
       if (std::abs(normal.normalized().dot(d)) > 1.0 - 1e-9) return true;
     return false;
   };
+  // The faces the fill adds after the seen ones are level, along the ridge or across it, and one
+  // of them is a floor under the lowest seen point.
+  const auto expectALevelBox = [&](const std::vector<PlanarPrimitive>& fused, std::size_t seen) {
+    bool floor = false;
+    for (std::size_t i = seen; i < fused.size(); ++i) {
+      EXPECT_TRUE(isOneOf(fused[i].plane.normal, {Eigen::Vector3d::UnitZ(), ridge, across}))
+          << fused[i].plane.normal.transpose();
+      if (fused[i].plane.normal.isApprox(-Eigen::Vector3d::UnitZ(), 1e-9)) {
+        floor = true;
+        EXPECT_NEAR(fused[i].plane.signedDistance({0, 0, lowest}), 0.0, 1e-6);
+      }
+    }
+    EXPECT_TRUE(floor);
+  };
   ObservedFusionOptions options;
   options.unseen_point_fraction = 1.0;
   options.contradiction_radius = 0.0;
   ObservedFusionReport report;
 
-  const auto tilted = fuseWithObserved({}, observed, options, &report);
+  const auto mirrored = fuseWithObserved({}, observed, options, &report);
+  ASSERT_GT(report.filled_faces, 0u);
+  EXPECT_TRUE(report.box_on_mirror_pair);
+  EXPECT_FALSE(report.box_on_one_plane);
+  EXPECT_NE(describe(report).find("so the box lies on the bisectors of mirror-image planes"), std::string::npos)
+      << describe(report);
+  ASSERT_EQ(mirrored.size(), 2u + report.filled_faces);
+  expectALevelBox(mirrored, 2);
+
+  std::vector<PlanarPrimitive> lopsided = observed;
+  lopsided[1].points.resize(30);  // too small to be the larger slope's mirror image
+  const auto tilted = fuseWithObserved({}, lopsided, options, &report);
   ASSERT_GT(report.filled_faces, 0u);
   EXPECT_TRUE(report.box_on_one_plane);
+  EXPECT_FALSE(report.box_on_mirror_pair);
   EXPECT_NE(describe(report).find("no two seen planes are perpendicular, so the box lies on the largest one"),
             std::string::npos)
       << describe(report);
@@ -829,22 +856,17 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
   for (auto& p : underside.points) p.getVector3fMap() -= (0.05 * observed[0].plane.normal).cast<float>();
   fuseWithObserved({}, {observed[0], underside}, options, &report);
   EXPECT_FALSE(report.box_on_one_plane);
+  EXPECT_FALSE(report.box_on_mirror_pair);
 
   options.scanner_direction = {0, 0, 1};
-  const auto level = fuseWithObserved({}, observed, options, &report);
-  ASSERT_GT(report.filled_faces, 0u);
-  EXPECT_FALSE(report.box_on_one_plane);
-  ASSERT_EQ(level.size(), 2u + report.filled_faces);
-  bool floor = false;
-  for (std::size_t i = 2; i < level.size(); ++i) {
-    EXPECT_TRUE(isOneOf(level[i].plane.normal, {Eigen::Vector3d::UnitZ(), ridge, across}))
-        << level[i].plane.normal.transpose();
-    if (level[i].plane.normal.isApprox(-Eigen::Vector3d::UnitZ(), 1e-9)) {
-      floor = true;
-      EXPECT_NEAR(level[i].plane.signedDistance({0, 0, lowest}), 0.0, 1e-6);
-    }
+  for (const auto* scan : {&observed, &lopsided}) {
+    const auto level = fuseWithObserved({}, *scan, options, &report);
+    ASSERT_GT(report.filled_faces, 0u);
+    EXPECT_FALSE(report.box_on_one_plane);
+    EXPECT_FALSE(report.box_on_mirror_pair);
+    ASSERT_EQ(level.size(), 2u + report.filled_faces);
+    expectALevelBox(level, 2);
   }
-  EXPECT_TRUE(floor);
 }
 
 TEST(ObservedFusion, CoordinatesNear1e20DoNotCrashIt) {

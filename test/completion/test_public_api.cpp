@@ -423,11 +423,13 @@ TEST(PacoCompleteTool, WritesPrimitivesAndFailsCleanly) {
   EXPECT_EQ(test::runCommand(common + " -o " + dir.file("t.vg") + " --turns 25 --model " + dir.file("tiny.pt"), &output), 2);
   EXPECT_NE(output.find("--turns must be 1 to 24"), std::string::npos) << output;
   EXPECT_FALSE(std::filesystem::exists(dir.file("t.vg")));
-  // So is a known extent that is not a box (fusion's option, shared with paco_reconstruct).
+  // So is a known extent that is neither a point nor a box (fusion's option, shared with
+  // paco_reconstruct).
   EXPECT_EQ(test::runCommand(common + " -o " + dir.file("t.vg") + " --known-extent 0,0,0,1,1 --model " + dir.file("tiny.pt"),
                              &output),
             2);
-  EXPECT_NE(output.find("--known-extent takes X0,Y0,Z0,X1,Y1,Z1"), std::string::npos) << output;
+  EXPECT_NE(output.find("--known-extent takes X,Y,Z (a point), X0,Y0,Z0,X1,Y1,Z1 (a box)"), std::string::npos)
+      << output;
   EXPECT_FALSE(std::filesystem::exists(dir.file("t.vg")));
   // A corrupt model: a clear error, a non-zero exit and no output file.
   test::writeBytes(dir.file("bad.pt"), "garbage");

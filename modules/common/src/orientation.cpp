@@ -45,6 +45,21 @@ bool anyPair(const std::vector<Eigen::Vector3d>& normals, const std::vector<std:
   return false;
 }
 
+// How close two unit directions are, given |cos| of their angle: 1 when parallel (either way),
+// falling linearly with the angle to 0 at `radians`. A zero tolerance takes only exact matches, in
+// full. Callers skip pairs beyond the tolerance.
+double closeness(double cosine, double radians) {
+  return radians > 0.0 ? 1.0 - std::acos(std::min(1.0, cosine)) / radians : 1.0;
+}
+
+// The largest plane's normal with the coordinate axis least aligned with it, made perpendicular:
+// dominantPlaneAxes' frame when no two planes are perpendicular.
+Eigen::Matrix3d largestPlaneFrame(const Eigen::Vector3d& largest) {
+  Eigen::Index least = 0;
+  largest.cwiseAbs().minCoeff(&least);
+  return frameOf(largest, Eigen::Vector3d::Unit(least));
+}
+
 void checkSameLength(const char* function, const std::vector<Eigen::Vector3d>& normals,
                      const std::vector<double>& weights) {
   if (normals.size() != weights.size())
@@ -94,10 +109,7 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
     double total = 0.0;
     for (std::size_t k = 0; k < unit.size(); ++k) {
       const double cosine = (axes.transpose() * unit[k]).cwiseAbs().maxCoeff();
-      if (cosine < min_cosine) continue;
-      // A zero tolerance takes only planes exactly on an axis, in full.
-      const double closeness = radians > 0.0 ? 1.0 - std::acos(std::min(1.0, cosine)) / radians : 1.0;
-      total += std::sqrt(weights[order[k]]) * closeness;
+      if (cosine >= min_cosine) total += std::sqrt(weights[order[k]]) * closeness(cosine, radians);
     }
     return total;
   };
@@ -123,10 +135,68 @@ std::optional<Eigen::Matrix3d> dominantPlaneAxes(const std::vector<Eigen::Vector
   // The largest plane with the coordinate axis least aligned with it competes too: the only
   // frame when no two planes are perpendicular, and the better one when the largest plane
   // outweighs every perpendicular pair that leaves it off their axes.
-  Eigen::Index least = 0;
-  unit[0].cwiseAbs().minCoeff(&least);
-  const Eigen::Matrix3d largest = frameOf(unit[0], Eigen::Vector3d::Unit(least));
+  const Eigen::Matrix3d largest = largestPlaneFrame(unit[0]);
   if (!best || support(largest) > best_support) best = largest;
+  return best;
+}
+
+std::optional<Eigen::Matrix3d> mirrorPlaneAxes(const std::vector<Eigen::Vector3d>& normals,
+                                               const std::vector<double>& weights, double tolerance_degrees) {
+  checkSameLength("mirrorPlaneAxes", normals, weights);
+  if (hasPerpendicularPlanes(normals, weights, tolerance_degrees)) return std::nullopt;
+  std::vector<std::size_t> order = heaviestFirst(normals, weights);
+  // The 64 heaviest only, as dominantPlaneAxes: each frame's support compares every plane with
+  // every other, for every pair's frame.
+  if (order.size() > kFrameCandidates) order.resize(kFrameCandidates);
+  if (order.size() < 2) return std::nullopt;  // no pair
+  const Eigen::Index n = static_cast<Eigen::Index>(order.size());
+  Eigen::Matrix3Xd unit(3, n);
+  Eigen::VectorXd weight(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    unit.col(k) = normals[order[static_cast<std::size_t>(k)]].normalized();
+    weight(k) = weights[order[static_cast<std::size_t>(k)]];
+  }
+  const double radians = degreesToRadians(tolerance_degrees);
+  const double max_cosine = std::sin(radians), min_cosine = std::cos(radians);
+  // A plane's support: near an axis, as in dominantPlaneAxes; or mirrored across one of the
+  // frame's planes onto another plane, by the smaller weight: a face and a small chamfer are
+  // mirror images across their bisector, but the frame belongs to the face.
+  const auto support = [&](const Eigen::Matrix3d& axes) {
+    const Eigen::Matrix3Xd local = axes.transpose() * unit;
+    double total = 0.0;
+    for (Eigen::Index k = 0; k < n; ++k) {
+      double best = 0.0;
+      const double on_axis = local.col(k).cwiseAbs().maxCoeff();
+      if (on_axis >= min_cosine) best = std::sqrt(weight(k)) * closeness(on_axis, radians);
+      for (int mirror = 0; mirror < 3; ++mirror) {
+        // Nearly in that mirror plane already: its image is itself.
+        if (std::abs(local(mirror, k)) < max_cosine) continue;
+        Eigen::Vector3d image = local.col(k);
+        image(mirror) = -image(mirror);
+        for (Eigen::Index l = 0; l < n; ++l) {
+          const double cosine = std::abs(image.dot(local.col(l)));
+          if (l == k || cosine < min_cosine) continue;
+          best = std::max(best, std::sqrt(std::min(weight(k), weight(l))) * closeness(cosine, radians));
+        }
+      }
+      total += best;
+    }
+    return total;
+  };
+  std::optional<Eigen::Matrix3d> best;
+  double best_support = support(largestPlaneFrame(unit.col(0)));
+  for (Eigen::Index a = 0; a < n; ++a)
+    for (Eigen::Index b = a + 1; b < n; ++b) {
+      if (std::abs(unit.col(a).dot(unit.col(b))) >= min_cosine) continue;  // parallel: no bisector
+      // Sum and difference of two unit vectors are perpendicular; a flipped normal swaps them.
+      const Eigen::Matrix3d axes =
+          frameOf((unit.col(a) + unit.col(b)).normalized(), unit.col(a) - unit.col(b));
+      const double s = support(axes);
+      if (s > best_support) {
+        best_support = s;
+        best = axes;
+      }
+    }
   return best;
 }
 

@@ -70,12 +70,16 @@ bool isTrusted(const PlanarPrimitive& segment, std::size_t min_points) {
 // unknown): everything between the scan and the scanner is empty, so the box that closes the hidden
 // side has its walls along the lines of sight and its far face across them. Tilted onto a seen
 // plane instead (a roof slope, when no two seen planes are perpendicular), the box closed an
-// airborne scan of a building with a sloping floor and a slab that stood above the roof.
+// airborne scan of a building with a sloping floor and a slab that stood above the roof; without
+// the scanner's direction, the bisectors of mirror-image slopes give a level box.
 struct SeenNormals {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
   std::optional<Eigen::Matrix3d> axes;
-  bool axes_on_one_plane = false;  // no scanner direction; seen planes at an angle, but none perpendicular
+  // No scanner direction; seen planes at an angle, but none perpendicular: the axes are a guess,
+  // from mirror-image planes or else from the largest plane.
+  bool axes_on_mirror_pair = false;
+  bool axes_on_one_plane = false;
 };
 
 SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_t min_points,
@@ -92,8 +96,15 @@ SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_
     seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
     // Parallel planes only (a plate seen on both sides, a flat roof) leave no doubt about the
     // box's first axis; planes at an angle without a perpendicular pair do (a gable roof).
-    seen.axes_on_one_plane = seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes) &&
-                             hasPlanesAtAnAngle(seen.normals, seen.sizes);
+    if (seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes) &&
+        hasPlanesAtAnAngle(seen.normals, seen.sizes)) {
+      if (const auto mirrored = mirrorPlaneAxes(seen.normals, seen.sizes)) {
+        seen.axes = mirrored;
+        seen.axes_on_mirror_pair = true;
+      } else {
+        seen.axes_on_one_plane = true;
+      }
+    }
   }
   return seen;
 }
@@ -756,6 +767,9 @@ std::string describe(const ObservedFusionReport& report) {
                                                              : "") +
                                      (report.box_on_one_plane
                                           ? "; no two seen planes are perpendicular, so the box lies on the largest one"
+                                      : report.box_on_mirror_pair
+                                          ? "; no two seen planes are perpendicular, so the box lies on the bisectors "
+                                            "of mirror-image planes"
                                           : "") +
                                      ")"
                                : "") +
@@ -925,6 +939,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   }
   SeenBox seen_box = seenBox(observed, seen_normals);
   counts.box_on_one_plane = seen_normals.axes_on_one_plane;
+  counts.box_on_mirror_pair = seen_normals.axes_on_mirror_pair;
   counts.box_axes = seen_box.axes;
   if (!seen_box.box.isEmpty())
     for (const Eigen::Vector3d& p : options.known_extent_points) seen_box.box.extend(seen_box.axes.transpose() * p);

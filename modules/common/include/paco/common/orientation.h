@@ -42,6 +42,23 @@ bool hasPerpendicularPlanes(const std::vector<Eigen::Vector3d>& normals, const s
 bool hasPlanesAtAnAngle(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
                         double tolerance_degrees = 10.0);
 
+/// Orthonormal axes (the columns, a proper rotation) from the mirror symmetry of planes that meet
+/// at angles but never at right angles, where dominantPlaneAxes falls back to the largest plane:
+/// a gable or hip roof seen from above, whose slopes are mirror images of each other across the
+/// vertical plane through the ridge. Each pair of the 64 heaviest planes more than
+/// `tolerance_degrees` from parallel spans the frame of its bisectors: the normalised sum and
+/// difference of the two unit normals, and their cross product (for a roof's two slopes: up, across
+/// the ridge, along it). A plane supports a frame as in dominantPlaneAxes when it lies near one of
+/// its axes, and also when its mirror image across one of the frame's planes lies within the
+/// tolerance of another plane: then by the square root of the smaller of the two weights times
+/// the closeness, so that a small chamfer does not tilt the frame off the large face it cuts. The
+/// pair's frame with the most support is returned when it carries more than the largest plane's
+/// frame (dominantPlaneAxes' fallback), weighed the same way; empty otherwise, and when two of the
+/// planes are perpendicular (dominantPlaneAxes then has a frame of its own). Throws
+/// InvalidInputError when the lists differ in length.
+std::optional<Eigen::Matrix3d> mirrorPlaneAxes(const std::vector<Eigen::Vector3d>& normals,
+                                               const std::vector<double>& weights, double tolerance_degrees = 10.0);
+
 /// Orthonormal axes (the columns, a proper rotation) whose first column is `axis` (normalised, any
 /// length but zero) and whose other two follow the planes: each normal is projected perpendicular
 /// to `axis`, weighted by its weight times the projection's length (a plane nearly perpendicular

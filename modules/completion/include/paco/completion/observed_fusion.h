@@ -155,10 +155,14 @@ struct ObservedFusionReport {
   std::size_t seen_empty = 0;          ///< unseen completed primitives dropped with them
   /// Seen planes meet at an angle but no two are perpendicular, and no scanner direction was given:
   /// the seen box lies on the largest seen plane and a coordinate axis (paco::dominantPlaneAxes),
-  /// so where the fill closes the hidden side is a guess (a gable roof seen from above gets a box
-  /// tilted onto one slope; ObservedFusionOptions::scanner_direction sets the box's axes instead).
-  /// Parallel planes only (a plate seen on both sides) do not count.
+  /// so where the fill closes the hidden side is a guess (a gable roof seen from above would get a
+  /// box tilted onto one slope; ObservedFusionOptions::scanner_direction sets the box's axes
+  /// instead). Parallel planes only (a plate seen on both sides) do not count.
   bool box_on_one_plane = false;
+  /// The same case, but seen planes come in mirror-image pairs that outweigh the largest plane
+  /// (a gable or hip roof's slopes): the box lies on their bisectors (paco::mirrorPlaneAxes),
+  /// level under a symmetric roof. Still a guess without the scanner's direction.
+  bool box_on_mirror_pair = false;
   /// The seen box's axes (the columns, a rotation), in the primitives' frame: a known extent is
   /// enclosed by a box on these axes (known_extent_points).
   Eigen::Matrix3d box_axes = Eigen::Matrix3d::Identity();
