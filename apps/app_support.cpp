@@ -17,6 +17,9 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <c10/util/Exception.h>
+
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -31,6 +34,14 @@ int runTool(const std::string& tool_name, const std::function<int()>& body) {
     return 2;
   } catch (const paco::Error& e) {
     std::cerr << tool_name << ": error: " << e.what() << std::endl;
+    return 1;
+  } catch (const c10::Error& e) {
+    // LibTorch's own message (e.g. "not enough memory: you tried to allocate ..."), without the
+    // stack trace of LibTorch's frames that what() appends.
+    std::cerr << tool_name << ": error: " << e.what_without_backtrace() << std::endl;
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << tool_name << ": error: out of memory; try a smaller input or smaller settings" << std::endl;
     return 1;
   } catch (const std::exception& e) {
     std::cerr << tool_name << ": error: " << e.what() << std::endl;
@@ -290,6 +301,8 @@ void checkOutputPath(const std::string& path, const std::string& option, const s
   if (fs::is_directory(path, ec)) throw UsageError(option + " '" + path + "' is a folder; give a file name");
   const fs::path file(path);
   const fs::path folder = file.parent_path().empty() ? fs::path(".") : file.parent_path();
+  if (fs::exists(folder, ec) && !fs::is_directory(folder, ec))
+    throw UsageError(option + " '" + path + "': '" + folder.string() + "' is a file, not a folder");
   if (!fs::is_directory(folder, ec))
     throw UsageError(option + " '" + path + "': the folder '" + folder.string() + "' does not exist; create it first");
   // Create and remove a file there: permission bits alone miss read-only file systems, and root.

@@ -109,8 +109,15 @@ inline std::vector<double> parseNumbers(const std::string& option, const std::st
 /// Z0 <= Z1), and IoError for a cloud file that cannot be read.
 inline std::vector<Eigen::Vector3d> parseKnownExtent(const std::string& text) {
   if (text.empty()) return {};
+  if (std::filesystem::is_directory(text))
+    throw UsageError("--known-extent '" + text + "' is a folder; give a cloud file, a point X,Y,Z or a box");
   if (std::filesystem::is_regular_file(text)) {
-    const io::LabelledCloud cloud = io::loadCloud(text);  // finite: checked
+    io::LabelledCloud cloud;
+    try {
+      cloud = io::loadCloud(text);  // finite: checked
+    } catch (const IoError& e) {
+      throw IoError(std::string("--known-extent: ") + e.what());
+    }
     std::vector<Eigen::Vector3d> points = positionsOf(cloud.points);
     if (points.empty()) throw IoError("--known-extent: '" + text + "' has no points");
     for (Eigen::Vector3d& p : points) p += cloud.coordinate_offset;  // the file's coordinates

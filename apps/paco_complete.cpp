@@ -97,7 +97,11 @@ int run(int argc, char** argv) {
   if (!(o.epsilon > 0.0 && o.epsilon < 1.0))
     throw paco::app::UsageError("--epsilon must be in (0, 1) (a fraction of the bounding-box diagonal), got " +
                                 paco::app::shortNumber(o.epsilon));
-  if (o.points < 1) throw paco::app::UsageError("--points must be at least 1, got " + std::to_string(o.points));
+  // The network was trained on 2,048 points: many more only cost memory (2e9 took all 24 GB).
+  constexpr int kMaxNetworkPoints = 65536;
+  if (o.points < 1 || o.points > kMaxNetworkPoints)
+    throw paco::app::UsageError("--points must be 1 to " + std::to_string(kMaxNetworkPoints) +
+                                " (the shipped model was trained on 2048), got " + std::to_string(o.points));
 
   // Check everything that can be checked before the slow work: names, model file, input file.
   paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
@@ -159,8 +163,11 @@ int run(int argc, char** argv) {
   std::printf("segment (%s%s): %zu planes, coverage %.1f %%\n", o.use_labels ? "input labels" : o.segmenter.c_str(),
               noisy.c_str(), segmentation.size(), 100.0 * segmentation.coverage());
   if (segmentation.empty())
-    throw paco::InvalidInputError("'" + o.input +
-                                  "': no planar segment found; is it a piecewise-planar object?");
+    throw paco::InvalidInputError(
+        "'" + o.input + "': " +
+        (o.use_labels ? std::string("no point has a plane's label (labels below 0 mean none); drop --use-labels to "
+                                    "segment the points")
+                      : std::string("no planar segment found; is it a piecewise-planar object?")));
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
   std::vector<paco::PlanarPrimitive> primitives =

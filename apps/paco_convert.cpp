@@ -78,6 +78,10 @@ int convertCloud(const Options& o, paco::app::StageTimer& timer) {
   else if (o.pcd_encoding == "binary_compressed") write.pcd_encoding = paco::io::PcdEncoding::BinaryCompressed;
   else throw paco::app::UsageError("--pcd-encoding must be ascii, binary or binary_compressed");
   write.ascii_ply = o.ascii;
+  // --ascii is the PLY writer's; a PCD's encoding has its own option.
+  if (o.ascii && paco::io::extensionOf(o.output) != ".ply")
+    throw paco::app::UsageError("--ascii writes an ascii PLY cloud; for '" + o.output +
+                                "' drop it" + (paco::io::extensionOf(o.output) == ".pcd" ? " and give --pcd-encoding ascii" : ""));
 
   timer.start("load");
   paco::io::LabelledCloud cloud = paco::io::loadCloud(o.input, read);

@@ -212,7 +212,12 @@ int compare(const Options& o) {
       throw paco::IoError("'" + path + "' is not an eval.csv of this version of paco_eval (its header differs); give "
                           "the eval.csv of a paco_eval --dataset run");
     }
-    if (runs.back().empty()) throw paco::InvalidInputError("'" + path + "' holds no evaluated case");
+    if (runs.back().empty())
+      throw paco::InvalidInputError("'" + path + "' holds no evaluated case" +
+                                    (skipped > 0 ? " (" + std::to_string(skipped) +
+                                                       " incomplete or malformed lines skipped: a metric that is not "
+                                                       "a number, or a line cut short)"
+                                                 : std::string()));
     if (skipped > 0)
       std::fprintf(stderr, "%s: note: skipped %zu incomplete or malformed lines of '%s'\n", kTool, skipped, path.c_str());
   }

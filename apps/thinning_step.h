@@ -61,9 +61,12 @@ inline void addKeepStrayPointsOption(boost::program_options::options_description
                         "farther from the rest than the object is wide), which are left out by default");
 }
 
+/// Fewest points of a scan the tools work on (after repeated and stray points are left out).
+constexpr std::size_t kMinScanPoints = 10;
+
 /// The cloud the pipeline works on (paco::prepareScanPoints: repeated points and, unless
 /// `keep_strays`, stray points left out, then thinned to `max_points`), with a line for each
-/// step that changed anything.
+/// step that changed anything. Throws InvalidInputError when fewer than kMinScanPoints remain.
 inline std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> workingCloud(const pcl::PointCloud<pcl::PointNormal>& scan,
                                                                         std::size_t max_points, bool keep_strays,
                                                                         StageTimer& timer) {
@@ -80,6 +83,13 @@ inline std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> workingCloud(const pcl
   if (report.thinning.thinned())
     std::printf("thin: %zu of %zu points kept, one per %.3g-unit voxel (--max-points %zu)\n",
                 report.thinning.output_points, report.thinning.input_points, report.thinning.voxel_size, max_points);
+  // Any three points lie on a plane: a handful of points shows no plane, and the completion
+  // would make up a whole solid around them (three points came back as a closed box).
+  if (cloud->size() < kMinScanPoints)
+    throw InvalidInputError("the scan has " + std::to_string(cloud->size()) + " distinct point" +
+                            (cloud->size() == 1 ? "" : "s") + (cloud->size() < scan.size() ? " left" : "") +
+                            "; it takes at least " + std::to_string(kMinScanPoints) +
+                            " to show a plane: give a denser scan");
   return cloud;
 }
 

@@ -654,6 +654,25 @@ TEST(PacoReconstruct, TruncatedInputFailsWithoutOutputs) {
   EXPECT_EQ(filesIn(dir.path()), 1u);
 }
 
+// Three points lie on a plane whatever they are: the completion made a closed box around them.
+// Fewer than ten distinct points are refused, repeated points not counted; ten make a mesh.
+TEST(PacoReconstruct, AHandfulOfPointsIsRefused) {
+  TempDir dir;
+  paco::test::writeBytes(dir.file("three.xyz"), "0 0 0\n1 0 0\n0 1 0\n");
+  paco::test::writeBytes(dir.file("repeated.xyz"), "0 0 0\n1 0 0\n0 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 0\n1 0 0\n"
+                                                   "0 1 0\n0 0 0\n1 0 0\n0 1 0\n");
+  std::string log;
+  for (const char* scan : {"three.xyz", "repeated.xyz"}) {
+    SCOPED_TRACE(scan);
+    EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file(scan)) + " -o " + quoted(dir.file("m.obj")), &log),
+              1)
+        << log;
+    EXPECT_NE(log.find("the scan has 3 distinct points"), std::string::npos) << log;
+    EXPECT_NE(log.find("it takes at least 10 to show a plane"), std::string::npos) << log;
+    EXPECT_FALSE(fs::exists(dir.file("m.obj")));
+  }
+}
+
 TEST(PacoReconstruct, MissingModelIsAClearError) {
   TempDir dir;
   std::string log;

@@ -229,6 +229,30 @@ TEST(PacoTools, AFailedTrainingRunLeavesNoFolder) {
   EXPECT_TRUE(fs::is_directory(dir.file("run")));
 }
 
+// What is wrong, in the tools' own words: an option for another format, a folder where a file
+// goes, a file where a folder goes.
+TEST(PacoTools, MessagesSayWhatIsWrongWithAPath) {
+  REQUIRE_TOOLS("paco_convert", "paco_assemble", "paco_reconstruct");
+  TempDir dir;
+  paco::io::saveCloud(dir.file("box.ply"), sparselyLabelledBox());
+  fs::create_directory(dir.file("folder"));
+  const std::string in = quoted(dir.file("box.ply"));
+  expectRefused(tool("paco_convert") + " " + in + " " + quoted(dir.file("c.pcd")) + " --ascii",
+                "--ascii writes an ascii PLY cloud; for '" + dir.file("c.pcd") + "' drop it and give --pcd-encoding ascii");
+  expectRefused(tool("paco_reconstruct") + " " + in + " -o " + quoted(dir.file("box.ply") + "/m.obj"),
+                "'" + dir.file("box.ply") + "' is a file, not a folder");
+  expectRefused(tool("paco_reconstruct") + " " + in + " -o " + quoted(dir.file("m.obj")) + " --known-extent " +
+                    quoted(dir.file("folder")),
+                "--known-extent '" + dir.file("folder") + "' is a folder");
+  std::string log;
+  EXPECT_EQ(paco::test::runCommand(tool("paco_assemble") + " " + quoted(dir.file("folder")) + " -o " +
+                                       quoted(dir.file("a.obj")), &log),
+            1)
+      << log;
+  EXPECT_NE(log.find("is a folder, not a point cloud file"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(dir.file("c.pcd")) || fs::exists(dir.file("m.obj")) || fs::exists(dir.file("a.obj")));
+}
+
 TEST(PacoTools, OptionErrorsSpeakOfTheToolsOptions) {
   REQUIRE_TOOLS("paco_segment", "paco_assemble", "paco_complete", "paco_reconstruct");
   TempDir dir;
@@ -247,7 +271,9 @@ TEST(PacoTools, OptionErrorsSpeakOfTheToolsOptions) {
       {tool("paco_complete") + " " + in + " -o " + quoted(dir.file("p.vg")) + " -e 0",
        "--epsilon must be in (0, 1) (a fraction of the bounding-box diagonal), got 0"},
       {tool("paco_complete") + " " + in + " -o " + quoted(dir.file("p.vg")) + " --points 0",
-       "--points must be at least 1, got 0"},
+       "--points must be 1 to 65536 (the shipped model was trained on 2048), got 0"},
+      {tool("paco_complete") + " " + in + " -o " + quoted(dir.file("p.vg")) + " --points 2000000000",
+       "--points must be 1 to 65536 (the shipped model was trained on 2048), got 2000000000"},
       {tool("paco_reconstruct") + " " + in + " -o " + quoted(dir.file("m.obj")) + " --time-limit -1",
        "--time-limit must be more than 0 seconds, got -1"}};
   for (const auto& [command, message] : cases) {

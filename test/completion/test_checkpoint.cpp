@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace paco {
 namespace {
 
@@ -226,6 +228,33 @@ TEST(Checkpoint, ADamagedWeightTensorIsAModelError) {
   net->save(model);
   writeModelFile(dir.file("unchecked.pt"), tinyModelConfig(), model, parameterCount(*net));
   EXPECT_EQ(errorOf([&] { loadCheckpoint(dir.file("unchecked.pt")); }), "NO ERROR");
+}
+
+// NaN or infinite weights (damaged bytes, or a diverged training run) are refused, in files with
+// checksums (which match such values) and without them (the shipped model's kind), not run into
+// a completion that finds no plane.
+TEST(Checkpoint, NonFiniteWeightsAreAModelErrorWithOrWithoutChecksums) {
+  test::TempDir dir;
+  torch::NoGradGuard no_grad;
+  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    SCOPED_TRACE(bad);
+    PacoNetwork net(tinyModelConfig());
+    std::string name;
+    for (const auto& item : net->named_parameters())
+      if (name.empty() && item.key().rfind("encoder.", 0) == 0) name = item.key();
+    ASSERT_FALSE(name.empty());
+    net->named_parameters()[name].view(-1)[0] = bad;
+    saveCheckpoint(dir.file("checked.pt"), net);
+    torch::serialize::OutputArchive archive;
+    net->save(archive);
+    writeModelFile(dir.file("unchecked.pt"), tinyModelConfig(), archive, parameterCount(*net));
+    for (const char* file : {"checked.pt", "unchecked.pt"}) {
+      const std::string error = errorOf([&] { CompletionModel::load(dir.file(file)); });
+      EXPECT_TRUE(contains(error, "the encoder tensor '" + name.substr(8) + "' holds NaN or infinite values"))
+          << error;
+      EXPECT_TRUE(contains(error, file)) << error;
+    }
+  }
 }
 
 TEST(Checkpoint, UnwritableFolderIsAnIoError) {

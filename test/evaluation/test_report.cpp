@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace ev = paco::evaluation;
@@ -302,4 +303,26 @@ TEST(PairedComparison, RunsWithoutACommonCaseGiveNothing) {
   EXPECT_TRUE(ev::comparePaired({}, before).empty());
   // One level only: no "all" row.
   EXPECT_EQ(ev::comparePaired(before, before).size(), 1u);
+}
+
+// A row whose CD, HD or NC is not a finite number is malformed: read, it made every mean it
+// joined NaN ("2.754 -> nan" in paco_eval --compare). It is skipped and counted, as a cut line is.
+TEST(EvaluationCsv, RowsWithANonFiniteMetricAreSkippedAndCounted) {
+  paco::test::TempDir dir;
+  std::ofstream out(dir.file("eval.csv"));
+  out << ev::csvHeader() << '\n';
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const double cd : {2.0, nan, std::numeric_limits<double>::infinity(), 3.0}) {
+    ev::EvaluationRecord r = pairedCase("part" + std::to_string(static_cast<int>(out.tellp())), 0, cd, 10.0, 0.8, 0.5);
+    ev::appendRecord(out, r);
+  }
+  ev::EvaluationRecord no_nc = pairedCase("no-nc", 0, 2.0, 10.0, nan, 0.5);
+  ev::appendRecord(out, no_nc);
+  out.close();
+  std::size_t skipped = 0;
+  const auto records = ev::readRecords(dir.file("eval.csv"), &skipped);
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_DOUBLE_EQ(records[0].chamfer, 2.0);
+  EXPECT_DOUBLE_EQ(records[1].chamfer, 3.0);
+  EXPECT_EQ(skipped, 3u);
 }

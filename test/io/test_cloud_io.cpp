@@ -491,6 +491,48 @@ TEST(CloudIoErrors, TruncatedAndMalformedPly) {
   }
 }
 
+// A header that declares fewer points than the data holds is refused, not obeyed: reading only
+// what it declares dropped 98 % of a scan without a word. Trailing whitespace is no data.
+TEST(CloudIoErrors, HeadersThatUndercountTheDataAreRefusedInEveryFormat) {
+  TempDir dir;
+  const LabelledCloud cloud = makeCloud(100, true, false);
+  const auto replaceAll = [](std::string text, const std::string& from, const std::string& to) {
+    for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+      text.replace(at, from.size(), to);
+    return text;
+  };
+  const struct {
+    std::string name;
+    paco::io::PcdEncoding pcd;
+    bool ascii_ply;
+    std::vector<std::pair<std::string, std::string>> edits;
+  } cases[] = {
+      {"ascii.pcd", paco::io::PcdEncoding::Ascii, false, {{"WIDTH 100", "WIDTH 60"}, {"POINTS 100", "POINTS 60"}}},
+      {"binary.pcd", paco::io::PcdEncoding::Binary, false, {{"WIDTH 100", "WIDTH 60"}, {"POINTS 100", "POINTS 60"}}},
+      {"ascii.ply", paco::io::PcdEncoding::Binary, true, {{"element vertex 100", "element vertex 60"}}},
+      {"binary.ply", paco::io::PcdEncoding::Binary, false, {{"element vertex 100", "element vertex 60"}}},
+      {"rows.npy", paco::io::PcdEncoding::Binary, false, {{"(100, ", "(60,  "}}},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    paco::io::CloudWriteOptions options;
+    options.pcd_encoding = c.pcd;
+    options.ascii_ply = c.ascii_ply;
+    paco::io::saveCloud(dir.file(c.name), cloud, options);
+    const std::string whole = readBytes(dir.file(c.name));
+    std::string edited = whole;
+    for (const auto& [from, to] : c.edits) {
+      ASSERT_NE(edited.find(from), std::string::npos) << from;
+      edited = replaceAll(edited, from, to);
+    }
+    writeBytes(dir.file("lying_" + c.name), edited);
+    expectLoadError(dir.file("lying_" + c.name), "the header undercounts the data");
+    if (c.name.find("npy") != std::string::npos) continue;  // .npy files end with their data
+    writeBytes(dir.file("spaced_" + c.name), whole + "\n  \n");
+    EXPECT_EQ(paco::io::loadCloud(dir.file("spaced_" + c.name)).points.size(), 100u);
+  }
+}
+
 TEST(CloudIoErrors, TruncatedAndMalformedXyz) {
   TempDir dir;
   writeBytes(dir.file("a.xyz"), "1 2 3\n4 5 6\n7 8");

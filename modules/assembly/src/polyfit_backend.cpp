@@ -356,8 +356,9 @@ BackendOutcome runPolyFit(const std::vector<PlanarPrimitive>& primitives, const 
   }
   if (mesh.faces.empty()) {
     outcome.status = AssemblyStatus::EmptySolution;
-    outcome.message = "PolyFit selected no face (the optimal model is empty); check the primitives' points "
-                      "or lower the complexity weight";
+    outcome.message = "PolyFit selected no face (the optimal model is empty); check the primitives' points, "
+                      "lower the complexity weight (paco_assemble --complexity) or use the cell-complex "
+                      "backend";
   }
   return outcome;
 }

@@ -153,6 +153,7 @@ HiddenExtentModel::ConstPtr HiddenExtentModel::load(const std::string& path) {
     torch::serialize::InputArchive mlp;
     root.read("mlp", mlp);
     impl->mlp->load(mlp);
+    checkWeightsReadable(*impl->mlp, "hidden-extent head '" + path + "':");
   } catch (const c10::Error& e) {
     throw ModelError("hidden-extent head '" + path + "' is corrupt or truncated (" + e.what_without_backtrace() +
                      "): train it again or restore the file");

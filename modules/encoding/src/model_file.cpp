@@ -164,6 +164,27 @@ void saveArchiveAtomically(torch::serialize::OutputArchive& archive, const std::
   }
 }
 
+void checkWeightsReadable(const torch::nn::Module& module, const std::string& description) {
+  auto check = [&](const std::string& name, const torch::Tensor& t) {
+    if (!t.defined() || t.numel() == 0) return;
+    // The last element the view reaches, in the storage's elements: offset + sum (size - 1) * stride.
+    std::int64_t last = t.storage_offset();
+    for (std::int64_t d = 0; d < t.dim(); ++d) last += (t.size(d) - 1) * t.stride(d);
+    const auto needed = static_cast<std::size_t>(last + 1) * t.element_size();
+    if (!t.has_storage() || t.storage().nbytes() < needed)
+      throw ModelError(description + " tensor '" + name + "' holds " +
+                       std::to_string(t.has_storage() ? t.storage().nbytes() : 0) + " bytes but its shape " +
+                       c10::str(t.sizes()) + " needs " + std::to_string(needed) +
+                       ": the file is truncated or damaged; copy or train it again");
+    if (t.is_floating_point() && !torch::isfinite(t).all().item<bool>())
+      throw ModelError(description + " tensor '" + name +
+                       "' holds NaN or infinite values: the file is damaged, or the training that wrote it "
+                       "diverged; copy it again or train a new one");
+  };
+  for (const auto& item : module.named_parameters()) check(item.key(), item.value());
+  for (const auto& item : module.named_buffers()) check(item.key(), item.value());
+}
+
 void loadModuleWeights(torch::nn::Module& module, torch::serialize::InputArchive& archive, const ModelFile& file,
                        const std::string& name_prefix, const std::string& what) {
   const std::string& path = file.path;
@@ -189,6 +210,7 @@ void loadModuleWeights(torch::nn::Module& module, torch::serialize::InputArchive
   };
   for (const auto& item : module.named_parameters()) check(item.key(), item.value());
   for (const auto& item : module.named_buffers()) check(item.key(), item.value());
+  checkWeightsReadable(module, "model file " + quoted(path) + ": the " + what);
   if (file.weight_checksums.empty()) return;
   for (const auto& [name, crc] : weightChecksums(module)) {
     const auto stored = file.weight_checksums.find(name_prefix + name);

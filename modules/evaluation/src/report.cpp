@@ -73,6 +73,14 @@ double parseNumber(const std::string& text) {
   return v;
 }
 
+// CD, HD and NC: every case has them, failed ones their failure-box scores; a row without them
+// is malformed, and would make every mean it joins NaN.
+double parseFiniteNumber(const std::string& text) {
+  const double v = parseNumber(text);
+  if (!std::isfinite(v)) throw std::invalid_argument("not a finite number");
+  return v;
+}
+
 const char* kFixedColumns[] = {"method", "assembler", "part", "level", "view", "status", "reason",
                                "cd", "hd", "nc", "nc_prim", "unmatched_pred", "faces", "vertices",
                                "closed", "volume_ratio", "cd_pred_to_gt", "cd_gt_to_pred",
@@ -342,10 +350,10 @@ std::vector<EvaluationRecord> readRecords(const std::string& path, std::size_t* 
       r.level = std::stoi(f[3]);
       r.view = std::stoi(f[4]);
       r.reason = failureReasonFromString(f[6]);
-      r.chamfer = parseNumber(f[7]);
-      r.hausdorff = parseNumber(f[8]);
-      r.normal_consistency = parseNumber(f[9]);
-      r.nc_prim = f[10].empty() ? -1.0 : parseNumber(f[10]);
+      r.chamfer = parseFiniteNumber(f[7]);
+      r.hausdorff = parseFiniteNumber(f[8]);
+      r.normal_consistency = parseFiniteNumber(f[9]);
+      r.nc_prim = f[10].empty() ? -1.0 : parseFiniteNumber(f[10]);
       r.unmatched_predicted = f[11].empty() ? -1 : std::stoi(f[11]);
       r.num_faces = static_cast<std::size_t>(std::stoull(f[12]));
       r.num_vertices = static_cast<std::size_t>(std::stoull(f[13]));

@@ -302,6 +302,8 @@ std::string extensionOf(const std::string& path) {
 }
 
 LabelledCloud loadCloud(const std::string& path, const CloudReadOptions& options) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) fail(path, "is a folder, not a point cloud file");
   const std::string ext = extensionOf(path);
   LabelledCloud cloud;
   if (ext == ".npy") {

@@ -20,6 +20,13 @@ void fail(const std::string& path, const std::string& problem) {
   throw IoError("'" + path + "': " + problem);
 }
 
+void failOnDataAfterDeclared(const std::string& path, std::string_view rest, const std::string& declared) {
+  const std::size_t data = rest.find_first_not_of(" \t\r\n");
+  if (data == std::string_view::npos) return;
+  fail(path, "malformed: the header declares " + declared + ", but " + plural(rest.size() - data, "byte") +
+                 " of data follow them; the header undercounts the data: correct its count");
+}
+
 std::string readWholeFile(const std::string& path) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);

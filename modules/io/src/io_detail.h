@@ -16,6 +16,11 @@ namespace paco::io::detail {
 /// Throws paco::IoError "'<path>': <problem>".
 [[noreturn]] void fail(const std::string& path, const std::string& problem);
 
+/// Fails when `rest`, the bytes after all the data a header declares (`declared`, e.g. "100
+/// points"), holds anything but whitespace: the header undercounts the data, and reading only
+/// what it declares would drop the rest without a word.
+void failOnDataAfterDeclared(const std::string& path, std::string_view rest, const std::string& declared);
+
 /// The whole file. Fails for a missing file, a folder, an unreadable or an empty file.
 std::string readWholeFile(const std::string& path);
 

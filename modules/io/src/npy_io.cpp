@@ -189,6 +189,10 @@ NpyArray loadNpy(const std::string& path) {
     const std::size_t index = fortran && a.rows > 0 ? (k % a.rows) * a.cols + k / a.rows : k;
     a.data[index] = v;
   }
+  if (in.remaining() > 0)
+    fail(path, "malformed: header says shape (" + std::to_string(a.rows) + ", " + std::to_string(a.cols) + "), but " +
+                   detail::plural(in.remaining(), "byte") + " of data follow those " + std::to_string(count) +
+                   " values; the header undercounts the data: correct its shape");
   return a;
 }
 

@@ -174,10 +174,16 @@ LabelledCloud readPcd(const std::string& path, const std::string& bytes) {
           if (values.size() <= p * fields.size() + f) values.resize(2 * values.size() + fields.size());
           values[p * fields.size() + f] = v;
         }
+    failOnDataAfterDeclared(path, std::string_view(bytes).substr(text.offset()), plural(points, "point"));
   } else if (data_kind == "binary") {
     if (stride == 0 || available / stride < points)
       fail(path, "truncated: header says " + plural(points, "point") + ", data holds " +
                      std::to_string(stride ? available / stride : 0));
+    // Binary data has no separators: whatever follows the declared points, even a newline, is
+    // more data once it fills a point.
+    if (available - points * stride >= stride)
+      fail(path, "malformed: the header declares " + plural(points, "point") + ", but the data holds " +
+                     std::to_string(available / stride) + "; the header undercounts the data: correct POINTS and WIDTH");
     values.resize(points * fields.size());
     for (std::size_t p = 0; p < points; ++p)
       for (std::size_t f = 0; f < fields.size(); ++f)

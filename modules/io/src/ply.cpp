@@ -209,6 +209,12 @@ PlyFile readPly(const std::string& path, const std::string& bytes) {
       }
     }
   }
+  std::string declared;
+  for (const auto& e : ply.elements) declared += (declared.empty() ? "" : " and ") + plural(e.count, e.name);
+  failOnDataAfterDeclared(path,
+                          std::string_view(bytes).substr(format == Format::Ascii ? text.offset()
+                                                                                 : bytes.size() - bin.remaining()),
+                          declared.empty() ? "no element" : declared);
   return ply;
 }
 

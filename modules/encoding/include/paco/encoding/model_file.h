@@ -52,9 +52,17 @@ void writeModelFile(const std::string& path, const ModelConfig& config,
 /// writeModelFile and the hidden-extent head (paco::HiddenExtentModel::save) write through it.
 void saveArchiveAtomically(torch::serialize::OutputArchive& archive, const std::string& path, const std::string& what);
 
+/// Throws paco::ModelError naming `description` (e.g. "model file 'a.pt': the encoder") when a
+/// parameter or buffer of `module` holds fewer values than its shape needs (a record cut short
+/// inside a file that is otherwise whole: reading it would run past its end) or a floating-point
+/// value that is NaN or infinite (damaged bytes, or a diverged training run). Files written before
+/// weight checksums were stored (the shipped model among them) have only this check.
+void checkWeightsReadable(const torch::nn::Module& module, const std::string& description);
+
 /// Loads `module`'s parameters and buffers from `archive`; converts LibTorch's errors (missing
 /// or mis-shaped tensors) to paco::ModelError mentioning `file.path` and `what` (e.g.
-/// "encoder"). When the file stores weight checksums, every tensor must match its own, named
+/// "encoder"), and checks them with checkWeightsReadable. When the file stores weight checksums,
+/// every tensor must match its own, named
 /// `name_prefix` + its name in `module` ("encoder." for the encoder alone); a mismatch is a
 /// ModelError that says the file was damaged.
 void loadModuleWeights(torch::nn::Module& module, torch::serialize::InputArchive& archive, const ModelFile& file,
