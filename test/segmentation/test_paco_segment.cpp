@@ -53,6 +53,62 @@ TEST(PacoSegment, WritesALabelledPcdAndVertexGroups) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("labelled.partial.pcd")));
 }
 
+// A cloud above --max-points: a thinned copy is segmented, and every point gets the label of its
+// nearest kept point on that plane, and its estimated normal. The six faces come out as six
+// planes, each point on its own face's plane.
+TEST(PacoSegment, ACloudAboveMaxPointsIsLabelledFromAThinnedCopy) {
+  test::TempDir dir;
+  const auto box = test::sampleShape(test::makeBox({0, 0, 0}, {2.0, 1.5, 1.0}), 6000, 23);
+  io::LabelledCloud cloud;
+  cloud.points = *box.cloud;
+  cloud.has_normals = false;
+  io::saveCloud(dir.file("box.xyz"), cloud);
+  std::string log;
+  ASSERT_EQ(test::runCommand(quoted(test::toolPath("paco_segment")) + " " + quoted(dir.file("box.xyz")) + " -o " +
+                                 quoted(dir.file("labelled.pcd")) + " --vg " + quoted(dir.file("planes.vg")) +
+                                 " --max-points 1500",
+                             &log),
+            0)
+      << log;
+  EXPECT_NE(log.find("thin: segmenting"), std::string::npos) << log;
+  EXPECT_NE(log.find("of 6000 points"), std::string::npos) << log;
+  EXPECT_NE(log.find("gocopp: 6 planes"), std::string::npos) << log;
+  const io::LabelledCloud labelled = io::loadCloud(dir.file("labelled.pcd"));
+  ASSERT_EQ(labelled.points.size(), 6000u);
+  ASSERT_TRUE(labelled.hasLabels());
+  const io::VertexGroups groups = io::loadVertexGroups(dir.file("planes.vg"));
+  ASSERT_EQ(groups.segmentation.size(), 6u);
+  // Every labelled point lies on its label's plane, and that is its own face's plane but near an
+  // edge, where a point lies on both faces' planes (within 0.011, the inlier distance, of the
+  // edge: about 1.5 % of the points).
+  std::size_t labelled_points = 0, on_its_face = 0;
+  for (std::size_t i = 0; i < labelled.points.size(); ++i) {
+    const int label = labelled.labels[i];
+    if (label < 0) continue;
+    ++labelled_points;
+    const Plane& plane = groups.segmentation.planes[static_cast<std::size_t>(label)];
+    EXPECT_LT(std::abs(plane.signedDistance(labelled.points[i].getVector3fMap().cast<double>())), 0.02) << i;
+    on_its_face += std::abs(plane.normal.dot(box.plane_normals[static_cast<std::size_t>(box.labels[i])])) > 0.99;
+  }
+  EXPECT_GT(labelled_points, 5880u);  // 98 %
+  EXPECT_GT(on_its_face, 5820u);      // 97 %
+  std::size_t unit_normals = 0;
+  for (const auto& p : labelled.points) unit_normals += std::abs(p.getNormalVector3fMap().norm() - 1.0f) < 1e-3f;
+  EXPECT_EQ(unit_normals, 6000u);
+  // Without thinning (0) every point is segmented, as before.
+  ASSERT_EQ(test::runCommand(quoted(test::toolPath("paco_segment")) + " " + quoted(dir.file("box.xyz")) + " -o " +
+                                 quoted(dir.file("all.pcd")) + " --max-points 0",
+                             &log),
+            0)
+      << log;
+  EXPECT_EQ(log.find("thin:"), std::string::npos) << log;
+  EXPECT_EQ(test::runCommand(quoted(test::toolPath("paco_segment")) + " " + quoted(dir.file("box.xyz")) + " -o " +
+                                 quoted(dir.file("few.pcd")) + " --max-points 100",
+                             &log),
+            2);
+  EXPECT_NE(log.find("--max-points must be 0 (every point) or at least 256, got 100"), std::string::npos) << log;
+}
+
 TEST(PacoSegment, EstimatesMissingNormalsWithAnyBackend) {
   test::TempDir dir;
   const std::string input = dir.file("box.xyz"), output = dir.file("labelled.pcd");

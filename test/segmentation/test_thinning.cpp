@@ -106,6 +106,35 @@ TEST(Thinning, AThinnedNoisyScanStillSegmentsIntoItsFaces) {
   EXPECT_LE(result.size(), 10u) << "a few fragments at most, not one per neighbourhood";
 }
 
+// Labels from a thinned copy: a point takes a nearby kept point's plane only when it lies on it;
+// labels that do not fit the thinned copy are refused.
+TEST(Thinning, LabelsFromAThinnedCopyNeedThePointOnThePlane) {
+  pcl::PointCloud<pcl::PointNormal> thinned, cloud;
+  PlanarSegmentation segmentation;
+  segmentation.planes = {Plane::fromPointAndNormal({0, 0, 0}, {0, 0, 1})};
+  for (int i = 0; i < 4; ++i) {
+    pcl::PointNormal p;
+    p.x = static_cast<float>(i), p.y = 0.0f, p.z = 0.0f;
+    thinned.push_back(p);
+    segmentation.labels.push_back(i < 3 ? 0 : -1);  // the last kept point is on no plane
+  }
+  for (const float z : {0.0f, 0.05f, 0.5f}) {
+    pcl::PointNormal p;
+    p.x = 0.4f, p.y = 0.0f, p.z = z;
+    cloud.push_back(p);
+  }
+  pcl::PointNormal beside_the_unlabelled;  // nearest to the unlabelled point, but on the plane
+  beside_the_unlabelled.x = 2.9f, beside_the_unlabelled.y = beside_the_unlabelled.z = 0.0f;
+  cloud.push_back(beside_the_unlabelled);
+  std::vector<int> nearest;
+  EXPECT_EQ(labelsFromThinned(cloud, thinned, segmentation, 0.1, &nearest), (std::vector<int>{0, 0, -1, 0}));
+  EXPECT_EQ(nearest, (std::vector<int>{0, 0, 0, 3}));
+  segmentation.labels.pop_back();
+  EXPECT_THROW(labelsFromThinned(cloud, thinned, segmentation, 0.1), InvalidInputError);
+  segmentation.labels.push_back(1);  // names no plane
+  EXPECT_THROW(labelsFromThinned(cloud, thinned, segmentation, 0.1), InvalidInputError);
+}
+
 TEST(Thinning, ACloudWithinTheBudgetIsCopiedAsItIs) {
   const LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 1000, 1);
   box.cloud->push_back(pcl::PointNormal());  // a non-finite point stays: nothing is thinned

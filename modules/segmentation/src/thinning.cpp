@@ -267,6 +267,58 @@ ScanPreparationReport prepareScanPoints(const pcl::PointCloud<PointT>& input, st
   return report;
 }
 
+std::vector<int> labelsFromThinned(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                   const pcl::PointCloud<pcl::PointNormal>& thinned,
+                                   const PlanarSegmentation& segmentation, double max_distance,
+                                   std::vector<int>* nearest, const std::function<void(std::size_t)>& on_progress) {
+  if (segmentation.labels.size() != thinned.size())
+    throw InvalidInputError("labelsFromThinned: " + std::to_string(segmentation.labels.size()) + " labels for " +
+                            std::to_string(thinned.size()) + " thinned points");
+  for (const int label : segmentation.labels)
+    if (label >= static_cast<int>(segmentation.planes.size()))
+      throw InvalidInputError("labelsFromThinned: label " + std::to_string(label) + " names no plane (" +
+                              std::to_string(segmentation.planes.size()) + " planes)");
+  // The search runs on the finite thinned points only, mapped back to their indices.
+  auto finite = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  std::vector<int> finite_index;
+  for (std::size_t i = 0; i < thinned.size(); ++i)
+    if (pcl::isFinite(thinned[i])) {
+      finite->push_back(pcl::PointXYZ(thinned[i].x, thinned[i].y, thinned[i].z));
+      finite_index.push_back(static_cast<int>(i));
+    }
+  std::vector<int> labels(cloud.size(), -1);
+  if (nearest) nearest->assign(cloud.size(), -1);
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  if (!finite->empty()) tree.setInputCloud(finite);
+  // A point near an edge or at a plane's rim can have an unlabelled kept point, or one of the
+  // other plane, nearest: the nearest of a few that puts it on its plane labels it.
+  constexpr int kCandidates = 8;
+  pcl::Indices found(kCandidates);
+  std::vector<float> squared(kCandidates);
+  constexpr std::size_t kProgressStep = 4096;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (on_progress && i % kProgressStep == 0 && i > 0) on_progress(i);
+    const auto& p = cloud[i];
+    if (!pcl::isFinite(p)) continue;
+    if (finite->empty())
+      throw InvalidInputError("labelsFromThinned: the thinned cloud has no finite point to label from");
+    const int count = tree.nearestKSearch(pcl::PointXYZ(p.x, p.y, p.z), kCandidates, found, squared);
+    if (count < 1) continue;
+    if (nearest) (*nearest)[i] = finite_index[static_cast<std::size_t>(found[0])];
+    const Eigen::Vector3d position = p.getVector3fMap().cast<double>();
+    for (int k = 0; k < count; ++k) {  // nearest first
+      const int label = segmentation.labels[static_cast<std::size_t>(finite_index[static_cast<std::size_t>(found[k])])];
+      if (label < 0) continue;
+      if (std::abs(segmentation.planes[static_cast<std::size_t>(label)].signedDistance(position)) <= max_distance) {
+        labels[i] = label;
+        break;
+      }
+    }
+  }
+  if (on_progress) on_progress(cloud.size());
+  return labels;
+}
+
 template ScanPreparationReport prepareScanPoints<pcl::PointXYZ>(const pcl::PointCloud<pcl::PointXYZ>&, std::size_t,
                                                                  pcl::PointCloud<pcl::PointXYZ>&, bool);
 template ScanPreparationReport prepareScanPoints<pcl::PointNormal>(const pcl::PointCloud<pcl::PointNormal>&,

@@ -4,9 +4,13 @@
 //   pcl::PointCloud<pcl::PointNormal> working;
 //   const paco::ThinningReport r = paco::thinToPointBudget(*scan, 8192, working);
 //   if (r.thinned()) std::printf("%zu -> %zu points\n", r.input_points, r.output_points);
+#include <paco/common/primitive.h>
+
 #include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 namespace paco {
@@ -46,6 +50,22 @@ struct ThinningReport {
 template <typename PointT>
 ThinningReport thinToPointBudget(const pcl::PointCloud<PointT>& input, std::size_t max_points,
                                  pcl::PointCloud<PointT>& output);
+
+/// Labels every point of `cloud` from a segmentation of a thinned copy of it (`thinned`, for
+/// example thinToPointBudget's output, labelled by `segmentation`): each point takes the label of
+/// the nearest of its 8 nearest thinned points (FLANN) whose plane it lies within `max_distance`
+/// of (in the cloud's units), else -1. With `nearest` given, it receives each point's nearest thinned
+/// point (-1 for a non-finite point), e.g. to copy normals estimated on the thinned copy. Why:
+/// segmenting 10 million points took minutes; one nearest-neighbour query per point takes
+/// seconds. `on_progress`, when given, is called with the number of points done every few
+/// thousand points (a progress bar; an interrupt can throw from it). Throws InvalidInputError
+/// when `segmentation.labels` does not have one label per thinned point, a label names no plane,
+/// or `thinned` has no finite point while `cloud` has one.
+std::vector<int> labelsFromThinned(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                   const pcl::PointCloud<pcl::PointNormal>& thinned,
+                                   const PlanarSegmentation& segmentation, double max_distance,
+                                   std::vector<int>* nearest = nullptr,
+                                   const std::function<void(std::size_t)>& on_progress = {});
 
 /// For each point, the index of the first point at exactly the same coordinates, or -1 when it
 /// is the first there (non-finite points are never repeats). Repeats add no information, but a
