@@ -153,8 +153,9 @@ int run(int argc, char** argv) {
       ("threads", po::value(&o.threads)->default_value(o.threads), "threads for normal estimation (0: all cores)")
       ("ignore-normals", po::bool_switch(&o.ignore_normals), "estimate normals even when the file has them")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
-       "segment a thinned copy of a larger cloud (evenly spread points) and give every point the label of its "
-       "nearest kept point when it lies within the inlier distance of that plane; 0: segment every point");
+       "segment a thinned copy of a larger cloud (evenly spread points) and give every point the label of the "
+       "nearest of its 8 nearest kept points whose plane it lies within the inlier distance of; 0: segment every "
+       "point");
   paco::app::addNoiseAdaptationOption(general, o.noise_adaptation);
   po::options_description gocopp("gocopp options");
   gocopp.add_options()
@@ -242,8 +243,8 @@ int run(int argc, char** argv) {
     p.getNormalVector3fMap() = (*prepared.points)[i].getNormalVector3fMap();
   }
   if (thin) {
-    // Every point from the thinned copy: the label of its nearest kept point within the inlier
-    // distance of that plane, and, where the file had none, that point's estimated normal.
+    // Every point from the thinned copy: the label of a nearby kept point whose plane it lies on
+    // (labelsFromThinned), and, where the file had none, its nearest kept point's estimated normal.
     Eigen::Vector4f lo, hi;
     pcl::getMinMax3D(cloud.points, lo, hi);
     const double max_distance = segmenter->getUsedDistanceThreshold() * (hi - lo).head<3>().cast<double>().norm();
