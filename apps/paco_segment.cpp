@@ -11,8 +11,6 @@
 #include <paco/segmentation/segmentation.h>
 #include <paco/segmentation/thinning.h>
 
-#include <pcl/common/common.h>
-
 #include <boost/program_options.hpp>
 
 #include <cstdio>
@@ -236,18 +234,19 @@ int run(int argc, char** argv) {
               paco::app::noisyScanNote(o.epsilon, segmenter->getUsedDistanceThreshold()).c_str(),
               timer.seconds("segment"));
 
-  // Write the normals used (given or estimated) along with the labels.
+  // Write the normals used (given or estimated) along with the labels: onto the segmented
+  // points, which are the cloud's own unless it was thinned.
   const auto& prepared = segmenter->prepared();
+  pcl::PointCloud<pcl::PointNormal>& segmented = thin ? *points : cloud.points;
   for (std::size_t i = 0; i < prepared.size(); ++i) {
-    auto& p = (*points)[static_cast<std::size_t>(prepared.source_indices[i])];
+    auto& p = segmented[static_cast<std::size_t>(prepared.source_indices[i])];
     p.getNormalVector3fMap() = (*prepared.points)[i].getNormalVector3fMap();
   }
   if (thin) {
     // Every point from the thinned copy: the label of a nearby kept point whose plane it lies on
     // (labelsFromThinned), and, where the file had none, its nearest kept point's estimated normal.
-    Eigen::Vector4f lo, hi;
-    pcl::getMinMax3D(cloud.points, lo, hi);
-    const double max_distance = segmenter->getUsedDistanceThreshold() * (hi - lo).head<3>().cast<double>().norm();
+    // The inlier distance in the cloud's units, as the segmenter used it on the thinned copy.
+    const double max_distance = segmenter->getUsedDistanceThreshold() / prepared.normalization.scale;
     timer.start("label");
     // Ctrl-C ends the labelling cleanly; until here it ends the process (nothing is written yet).
     paco::InterruptGuard interrupt_guard;
@@ -272,8 +271,6 @@ int run(int argc, char** argv) {
         cloud.points[i].getNormalVector3fMap() = (*points)[static_cast<std::size_t>(nearest[i])].getNormalVector3fMap();
     std::printf("labelled %zu points from the %zu segmented: coverage %.1f %%, %.3f s\n", cloud.points.size(),
                 points->size(), 100.0 * result.coverage(), timer.seconds("label"));
-  } else {
-    for (std::size_t i = 0; i < points->size(); ++i) cloud.points[i].getNormalVector3fMap() = (*points)[i].getNormalVector3fMap();
   }
   cloud.has_normals = true;
   cloud.labels = result.labels;
