@@ -234,10 +234,11 @@ std::string shortNumber(double value) {
   return text.str();
 }
 
-FusionFlags::FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing,
+FusionFlags::FusionFlags(double align_unseen_degrees, double clip_margin, double tilt_margin, double fill_box_spacing,
                          double unseen_point_fraction, double contradiction_radius, double join_distance)
     : align_unseen_degrees(align_unseen_degrees),
       clip_margin(std::isinf(clip_margin) ? "off" : shortNumber(clip_margin)),
+      tilt_margin(std::isinf(tilt_margin) ? "off" : shortNumber(tilt_margin)),
       fill_box_spacing(fill_box_spacing),
       unseen_point_fraction(unseen_point_fraction),
       contradiction_radius(contradiction_radius),
@@ -250,6 +251,10 @@ void FusionFlags::addTo(boost::program_options::options_description& options) {
        "with fusion: turn unseen primitives within this many degrees of a seen direction parallel to it (0: off)")
       ("clip-margin", po::value(&clip_margin)->default_value(clip_margin),
        "with fusion: drop completed points beyond the box of the seen points plus this fraction of its diagonal (off: keep all)")
+      ("tilt-margin", po::value(&tilt_margin)->default_value(tilt_margin),
+       "with fusion, when no two seen planes are perpendicular (a roof seen from above): a seen face tilted against "
+       "the box keeps the network's points only within this fraction of the diagonal of the box along the axes it "
+       "tilts towards (off: keep all)")
       ("fill-box", po::value(&fill_box_spacing)->default_value(fill_box_spacing, shortNumber(fill_box_spacing)),
        "with fusion: cover the uncovered faces of the box of the seen points with points this far apart (fraction of its diagonal; 0: off)")
       ("unseen-points", po::value(&unseen_point_fraction)->default_value(unseen_point_fraction, shortNumber(unseen_point_fraction)),
@@ -279,11 +284,17 @@ void FusionFlags::validate() const {
     throw UsageError("--join-distance must be in [0, 1) (a fraction of the diagonal), got " +
                      std::to_string(join_distance));
   parseNonNegativeOrOff("--clip-margin", clip_margin);
+  parseNonNegativeOrOff("--tilt-margin", tilt_margin);
 }
 
 double FusionFlags::clipMargin() const {
   validate();
   return parseNonNegativeOrOff("--clip-margin", clip_margin);
+}
+
+double FusionFlags::tiltMargin() const {
+  validate();
+  return parseNonNegativeOrOff("--tilt-margin", tilt_margin);
 }
 
 void checkOutputPath(const std::string& path, const std::string& option, const std::vector<std::string>& extensions) {

@@ -97,23 +97,26 @@ void validateNoiseAdaptation(double multiple);
 /// paco::evaluation::MethodOptions in paco_eval, which can be built without the completion
 /// module), so that they are written once.
 struct FusionFlags {
-  FusionFlags(double align_unseen_degrees, double clip_margin, double fill_box_spacing, double unseen_point_fraction,
-              double contradiction_radius, double join_distance);
+  FusionFlags(double align_unseen_degrees, double clip_margin, double tilt_margin, double fill_box_spacing,
+              double unseen_point_fraction, double contradiction_radius, double join_distance);
 
   double align_unseen_degrees;
   std::string clip_margin;  ///< a number, or "off" (infinity)
+  std::string tilt_margin;  ///< a number, or "off" (infinity)
   double fill_box_spacing;
   double unseen_point_fraction;
   double contradiction_radius;
   double join_distance;
 
-  /// Adds --align-unseen, --clip-margin, --fill-box, --unseen-points, --contradiction-radius and
+  /// Adds --align-unseen, --clip-margin, --tilt-margin, --fill-box, --unseen-points, --contradiction-radius and
   /// --join-distance, bound to the fields above.
   void addTo(boost::program_options::options_description& options);
   /// Throws UsageError when a value is out of range.
   void validate() const;
   /// --clip-margin as a number (infinity for "off"); validates.
   double clipMargin() const;
+  /// --tilt-margin as a number (infinity for "off"); validates.
+  double tiltMargin() const;
 };
 
 /// Checks an output path before any slow work: its extension is one of `extensions` (lower case

@@ -32,7 +32,7 @@ namespace paco::app {
 /// The fusion flags with the library's defaults (paco::ObservedFusionOptions).
 inline FusionFlags libraryFusionFlags() {
   const ObservedFusionOptions defaults;
-  return FusionFlags(defaults.align_unseen_degrees, defaults.clip_margin, defaults.fill_spacing,
+  return FusionFlags(defaults.align_unseen_degrees, defaults.clip_margin, defaults.tilt_margin, defaults.fill_spacing,
                      defaults.unseen_point_fraction, defaults.contradiction_radius, defaults.join_distance);
 }
 
@@ -310,6 +310,7 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
   ObservedFusionOptions options;
   options.align_unseen_degrees = flags.align_unseen_degrees;
   options.clip_margin = flags.clipMargin();
+  options.tilt_margin = flags.tiltMargin();
   options.fill_spacing = flags.fill_box_spacing;
   options.unseen_point_fraction = flags.unseen_point_fraction;
   options.contradiction_radius = flags.contradiction_radius;

@@ -32,8 +32,8 @@ namespace {
 const char kTool[] = "paco_eval";
 
 paco::app::FusionFlags fusionFlagsOf(const ev::MethodOptions& method) {
-  return {method.align_unseen_degrees, method.clip_margin, method.fill_box_spacing, method.unseen_point_fraction,
-          method.contradiction_radius, method.join_distance};
+  return {method.align_unseen_degrees, method.clip_margin, method.tilt_margin, method.fill_box_spacing,
+          method.unseen_point_fraction, method.contradiction_radius, method.join_distance};
 }
 
 struct Options {
@@ -289,6 +289,7 @@ int dataset(const Options& o) {
     throw paco::app::UsageError("--known-extent-oracle works through the box fill of observed fusion: drop --observed-fusion off");
   b.method.align_unseen_degrees = o.fusion.align_unseen_degrees;
   b.method.clip_margin = o.fusion.clipMargin();
+  b.method.tilt_margin = o.fusion.tiltMargin();
   b.method.fill_box_spacing = o.fusion.fill_box_spacing;
   b.method.unseen_point_fraction = o.fusion.unseen_point_fraction;
   b.method.contradiction_radius = o.fusion.contradiction_radius;

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace paco {
 namespace {
@@ -202,6 +203,11 @@ TEST(ObservedFusion, TolerancesDecideAndBadOptionsAreRejected) {
   bad = ObservedFusionOptions{};
   bad.max_angle_degrees = std::nan("");
   EXPECT_THROW(fuseWithObserved(completed, observed, bad), InvalidInputError);
+  for (const double margin : {-0.1, std::nan("")}) {
+    bad = ObservedFusionOptions{};
+    bad.tilt_margin = margin;
+    EXPECT_THROW(fuseWithObserved(completed, observed, bad), InvalidInputError);
+  }
   // Nothing observed: the completion is returned as it is.
   EXPECT_EQ(fuseWithObserved(completed, {}).size(), 1u);  // (nor a box to fill)
 }
@@ -867,6 +873,74 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
     ASSERT_EQ(level.size(), 2u + report.filled_faces);
     expectALevelBox(level, 2);
   }
+}
+
+// A gable roof seen from above, turned 30 degrees about the vertical: no two seen planes are
+// perpendicular. The network carries one slope on along the ridge past the seen box, which is kept
+// (a seen face may run on past the scan), and down the slope past the eaves, which is dropped:
+// there it would hang below the roof (on an airborne scan, tens of metres sideways). A level face
+// seen with a wall runs on past the box.
+TEST(ObservedFusion, ATiltedSeenFaceEndsAtTheSeenBoxAlongItsSlope) {
+  const Eigen::Matrix3d heading =
+      Eigen::AngleAxisd(degreesToRadians(30.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d ridge = heading * Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d across = heading * Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const double slope = degreesToRadians(20.0);
+  const double run = 0.5 / std::cos(slope);  // ridge to eaves, along the slope
+  const Eigen::Vector3d top = 0.5 * across + up;  // the ridge line starts here
+  std::vector<PlanarPrimitive> roof;
+  std::vector<Eigen::Vector3d> downhill;
+  for (const double side : {-1.0, 1.0}) {
+    const Eigen::Vector3d normal = side * std::sin(slope) * across + std::cos(slope) * up;
+    downhill.push_back(side * std::cos(slope) * across - std::sin(slope) * up);
+    roof.push_back(rectangle(top, ridge, run * downhill.back(), 20, 10, normal));
+  }
+  PlanarPrimitive predicted = rectangle(top + 1.1 * ridge, 0.3 * ridge, 0.5 * run * downhill[0], 6, 5,
+                                        roof[0].plane.normal);  // along the ridge, past the box
+  const PlanarPrimitive past_the_eaves = rectangle(top + 0.4 * ridge + (run + 0.2) * downhill[0], 0.2 * ridge,
+                                                   0.3 * downhill[0], 4, 6, roof[0].plane.normal);
+  const std::size_t along_the_ridge = predicted.points.size();
+  predicted.points += past_the_eaves.points;
+  predicted.confidence = 0.9f;
+
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved({predicted}, roof, fusionOnly(), &report);
+  ASSERT_EQ(fused.size(), 2u);
+  EXPECT_EQ(report.snapped, 1u);
+  EXPECT_EQ(report.tilted_points, past_the_eaves.points.size()) << describe(report);
+  EXPECT_EQ(fused[0].points.size(), roof[0].points.size() + along_the_ridge);
+  EXPECT_NE(describe(report).find(std::to_string(past_the_eaves.points.size()) +
+                                  " points of tilted seen faces past the seen box dropped"),
+            std::string::npos)
+      << describe(report);
+  // With the gable's end wall seen too (perpendicular to both slopes) the box's axes are not a
+  // guess and the rule is left alone: the points past the eaves stay.
+  std::vector<PlanarPrimitive> with_gable = roof;
+  with_gable.push_back(rectangle(Eigen::Vector3d::Zero(), across, 0.9 * up, 10, 9, -ridge));
+  const auto gabled = fuseWithObserved({predicted}, with_gable, fusionOnly(), &report);
+  EXPECT_EQ(report.tilted_points, 0u);
+  EXPECT_FALSE(report.box_on_mirror_pair);
+  EXPECT_EQ(gabled[0].points.size(), roof[0].points.size() + predicted.points.size());
+  // Within a margin as wide as their reach, or with the margin off, they stay.
+  for (const double margin : {0.6, std::numeric_limits<double>::infinity()}) {
+    ObservedFusionOptions wide = fusionOnly();
+    wide.tilt_margin = margin;
+    const auto kept = fuseWithObserved({predicted}, roof, wide, &report);
+    EXPECT_EQ(report.tilted_points, 0u);
+    EXPECT_EQ(kept[0].points.size(), roof[0].points.size() + predicted.points.size());
+  }
+
+  // A level top seen with a wall: the network's points of the top past the box all stay.
+  const std::vector<PlanarPrimitive> flat_roof = {
+      rectangle({0, 0, 1}, {1, 0, 0}, {0, 1, 0}, 10, 10, up),
+      rectangle({0, 0, 0}, {0, 1, 0}, {0, 0, 1}, 10, 10, {-1, 0, 0})};
+  PlanarPrimitive beyond = rectangle({1, 0, 1}, {0.5, 0, 0}, {0, 1, 0}, 5, 10, up);
+  beyond.confidence = 0.9f;
+  const auto level = fuseWithObserved({beyond}, flat_roof, fusionOnly(), &report);
+  EXPECT_EQ(report.tilted_points, 0u);
+  ASSERT_EQ(level.size(), 2u);
+  EXPECT_EQ(level[0].points.size(), 150u);
 }
 
 TEST(ObservedFusion, CoordinatesNear1e20DoNotCrashIt) {

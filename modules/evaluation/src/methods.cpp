@@ -327,6 +327,7 @@ MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
     ObservedFusionOptions fusion;
     fusion.align_unseen_degrees = options.align_unseen_degrees;
     fusion.clip_margin = options.clip_margin;
+    fusion.tilt_margin = options.tilt_margin;
     fusion.fill_spacing = options.fill_box_spacing;
     fusion.unseen_point_fraction = options.unseen_point_fraction;
     fusion.contradiction_radius = options.contradiction_radius;

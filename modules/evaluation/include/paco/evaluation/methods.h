@@ -112,6 +112,8 @@ struct MethodOptions {
   double align_unseen_degrees = 0.0;
   /// paco, with fusion: paco::ObservedFusionOptions::clip_margin (infinity = off).
   double clip_margin = std::numeric_limits<double>::infinity();
+  /// paco, with fusion: paco::ObservedFusionOptions::tilt_margin (infinity = off).
+  double tilt_margin = 0.02;
   /// paco, with fusion: paco::ObservedFusionOptions::fill_spacing (0 = off).
   double fill_box_spacing = 0.02;
   /// paco, with fusion: paco::ObservedFusionOptions::unseen_point_fraction (1 = all).
