@@ -32,6 +32,11 @@ int runTool(const std::string& tool_name, const std::function<int()>& body) {
   } catch (const UsageError& e) {
     std::cerr << tool_name << ": " << e.what() << "\nTry '" << tool_name << " --help'." << std::endl;
     return 2;
+  } catch (const paco::InterruptedError& e) {
+    // Ctrl-C (or SIGTERM) honoured at a stage boundary, before any output is committed: 130, as a
+    // shell reports SIGINT and as paco_train and paco_dataset end an interrupted run.
+    std::cerr << tool_name << ": " << e.what() << "; nothing written" << std::endl;
+    return 130;
   } catch (const paco::Error& e) {
     std::cerr << tool_name << ": error: " << e.what() << std::endl;
     return 1;

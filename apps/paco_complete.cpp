@@ -117,6 +117,8 @@ int run(int argc, char** argv) {
   if (o.model.empty())
     throw paco::ModelError("no model file found: pass --model FILE (train one with paco_train) or "
                            "set PACO_MODEL");
+  // From here on Ctrl-C stops at the next stage boundary with a message; loading the model comes first.
+  paco::InterruptGuard interrupt_guard;
   paco::app::StageTimer timer;
   if (o.threads > 0) paco::CompletionModel::setThreads(o.threads);
   timer.start("load model");
@@ -130,7 +132,7 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--points must be at least " + std::to_string(model->config().num_centres) +
                                 " (the model's centres), got " + std::to_string(o.points));
 
-  paco::InterruptGuard interrupt_guard;
+  if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
   timer.start("read");
   paco::io::CloudReadOptions read;
   if (o.drop_non_finite) read.non_finite = paco::io::NonFinitePolicy::Drop;

@@ -125,6 +125,8 @@ int run(int argc, char** argv) {
   assembler.setTimeLimit(o.time_limit);
   assembler.setMaxCandidateFaces(o.max_candidate_faces);
   assembler.setWarmStart(!o.no_warm_start);
+  // From here on Ctrl-C stops at the next stage boundary with a message; loading the model comes first.
+  paco::InterruptGuard interrupt_guard;
   paco::CompletionModel::ConstPtr model;
   paco::HiddenExtentModel::ConstPtr extent_head;
   paco::app::StageTimer timer;
@@ -140,7 +142,7 @@ int run(int argc, char** argv) {
     timer.stop();
   }
 
-  paco::InterruptGuard interrupt_guard;
+  if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
   timer.start("read");
   paco::io::CloudReadOptions read;
   if (o.drop_non_finite) read.non_finite = paco::io::NonFinitePolicy::Drop;

@@ -148,7 +148,7 @@ int run(int argc, char** argv) {
       ("min-parallel-points", po::value(&o.min_parallel_points)->default_value(o.min_parallel_points),
        "fewest points of a plane parallel to a larger one (0: none, else >= 3)")
       ("neighbours,k", po::value(&o.neighbours)->default_value(o.neighbours), "neighbours for normal estimation and region growing")
-      ("threads", po::value(&o.threads)->default_value(o.threads), "threads for normal estimation (0: all cores)")
+      ("threads", po::value(&o.threads)->default_value(o.threads), "threads for normal estimation, and for labelling above --max-points (0: all cores)")
       ("ignore-normals", po::bool_switch(&o.ignore_normals), "estimate normals even when the file has them")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "segment a thinned copy of a larger cloud (evenly spread points) and give every point the label of the "
@@ -261,7 +261,7 @@ int run(int argc, char** argv) {
       if (bar) bar->advance(done - shown);
       shown = done;
       if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
-    });
+    }, o.threads);
     if (bar) bar->finish();
     result.rebuildSegmentsFromLabels();
     timer.stop();

@@ -14,10 +14,13 @@
 #include "tiny_model_config.h"
 #endif
 
+#include <paco/common/error.h>
 #include <paco/common/surface_mesh.h>
 #include <paco/io/cloud_io.h>
 
 #include <gtest/gtest.h>
+
+#include "app_support.h"
 
 #include <filesystem>
 #include <iterator>
@@ -350,5 +353,25 @@ TEST(PacoTools, LabelsMayBeAnyNumbers) {
   EXPECT_NE(log.find(message), std::string::npos) << log;
 }
 #endif
+
+// Ctrl-C is honoured at a stage boundary by throwing paco::InterruptedError: the tool says so,
+// ends with 130 as a shell reports SIGINT, and its pending outputs are gone.
+TEST(PacoTools, AnInterruptEndsWith130AndLeavesNoOutput) {
+  TempDir dir;
+  const std::string mesh = dir.file("m.obj");
+  std::string written;
+  testing::internal::CaptureStderr();
+  const int code = paco::app::runTool("paco_x", [&]() -> int {
+    paco::app::PendingOutput out(mesh);
+    written = out.writePath();
+    paco::test::writeBytes(written, "v 0 0 0\n");
+    throw paco::InterruptedError("interrupted");
+  });
+  const std::string log = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(code, 130);
+  EXPECT_EQ(log, "paco_x: interrupted; nothing written\n");
+  EXPECT_FALSE(fs::exists(written));
+  EXPECT_FALSE(fs::exists(mesh));
+}
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "test_support.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <map>
 
@@ -228,6 +229,25 @@ TEST(MeshIoErrors, NonFiniteVertices) {
   expectMeshError(dir.file("nan.ply"), "vertex 3 has non-finite");
   paco::io::saveMesh(dir.file("nan.stl"), mesh);
   expectMeshError(dir.file("nan.stl"), "non-finite");
+}
+
+// A corrupt list count (0xFFFFFFFF in a file of a few hundred bytes) is reported with both
+// numbers, so that the user can tell a cut-short file from a corrupt count.
+TEST(MeshIoErrors, AListLongerThanTheFileSaysHowLong) {
+  TempDir dir;
+  std::string bytes =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uint int vertex_indices\nend_header\n";
+  const float corners[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  bytes.append(reinterpret_cast<const char*>(corners), sizeof(corners));
+  const std::uint32_t count = 0xFFFFFFFFu;
+  bytes.append(reinterpret_cast<const char*>(&count), sizeof(count));
+  const std::int32_t indices[3] = {0, 1, 2};
+  bytes.append(reinterpret_cast<const char*>(indices), sizeof(indices));
+  writeBytes(dir.file("corrupt.ply"), bytes);
+  expectMeshError(dir.file("corrupt.ply"),
+                  "face 0 has a list of 4294967295 items (17179869180 bytes) but the file ends 12 bytes later; "
+                  "if the file is whole, that list count is corrupt");
 }
 
 TEST(MeshIoErrors, WriterFailures) {

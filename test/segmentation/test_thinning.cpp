@@ -135,6 +135,45 @@ TEST(Thinning, LabelsFromAThinnedCopyNeedThePointOnThePlane) {
   EXPECT_THROW(labelsFromThinned(cloud, thinned, segmentation, 0.1), InvalidInputError);
 }
 
+// Over several chunks of the parallel search, any thread count labels every point alike, and the
+// progress callback sees every chunk end, the last at the point count.
+TEST(Thinning, LabellingOnSeveralThreadsMatchesOneThread) {
+  pcl::PointCloud<pcl::PointNormal> thinned, cloud;
+  PlanarSegmentation segmentation;
+  segmentation.planes = {Plane::fromPointAndNormal({0, 0, 0}, {0, 0, 1}),
+                         Plane::fromPointAndNormal({0, 0, 0}, {1, 0, 0})};
+  for (int i = 0; i < 50; ++i)
+    for (int j = 0; j < 50; ++j) {
+      pcl::PointNormal floor, wall;
+      floor.x = 0.02f * static_cast<float>(i), floor.y = 0.02f * static_cast<float>(j), floor.z = 0.0f;
+      wall.x = 0.0f, wall.y = floor.x, wall.z = 0.02f + floor.y;
+      thinned.push_back(floor);
+      segmentation.labels.push_back(0);
+      thinned.push_back(wall);
+      segmentation.labels.push_back(1);
+    }
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (int i = 0; i < 150000; ++i) {  // three chunks; a few points on neither plane
+    pcl::PointNormal p;
+    p.x = unit(rng), p.y = unit(rng), p.z = unit(rng);
+    if (i % 3 == 0) p.z = 0.0f;
+    else if (i % 3 == 1) p.x = 0.0f;
+    cloud.push_back(p);
+  }
+  std::vector<std::size_t> calls;
+  const std::vector<int> one = labelsFromThinned(cloud, thinned, segmentation, 0.005, nullptr, {}, 1);
+  const std::vector<int> two = labelsFromThinned(
+      cloud, thinned, segmentation, 0.005, nullptr, [&](std::size_t done) { calls.push_back(done); }, 2);
+  EXPECT_EQ(one, two);
+  EXPECT_EQ(calls, (std::vector<std::size_t>{65536, 131072, 150000}));
+  std::map<int, std::size_t> counts;
+  for (const int label : one) ++counts[label];
+  EXPECT_GE(counts[0] + counts[1], 100000u);  // every point of the floor and the wall
+  EXPECT_GT(counts[1], 45000u);
+  EXPECT_GT(counts[-1], 45000u);  // most of the points off both planes
+}
+
 TEST(Thinning, ACloudWithinTheBudgetIsCopiedAsItIs) {
   const LabelledSample box = test::sampleShape(test::makeBox({0, 0, 0}, {1, 1, 1}), 1000, 1);
   box.cloud->push_back(pcl::PointNormal());  // a non-finite point stays: nothing is thinned

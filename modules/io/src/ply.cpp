@@ -199,7 +199,13 @@ PlyFile readPly(const std::string& path, const std::string& bytes) {
           fail(path, "malformed: " + e.name + " " + std::to_string(r) + " has a list of " + numberText(value) +
                          " items");
         const auto n = static_cast<std::size_t>(value);
-        if (format != Format::Ascii && bin.remaining() < n * typeSize(prop.type)) truncated(r);
+        // A list longer than the rest of the file: the file was cut short, or the count is corrupt
+        // (0xFFFFFFFF in a file of a few kilobytes); say both numbers so the user can tell which.
+        if (format != Format::Ascii && bin.remaining() < n * typeSize(prop.type))
+          fail(path, "truncated: header says " + plural(e.count, e.name) + "; " + e.name + " " + std::to_string(r) +
+                         " has a list of " + plural(n, "item") + " (" + plural(n * typeSize(prop.type), "byte") +
+                         ") but the file ends " + plural(bin.remaining(), "byte") +
+                         " later; if the file is whole, that list count is corrupt");
         auto& items = e.list_items[p];
         for (std::size_t i = 0; i < n; ++i) {
           readValue(r, prop.type, value);

@@ -12,6 +12,8 @@
 
 #include <Eigen/Geometry>
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -270,7 +272,8 @@ ScanPreparationReport prepareScanPoints(const pcl::PointCloud<PointT>& input, st
 std::vector<int> labelsFromThinned(const pcl::PointCloud<pcl::PointNormal>& cloud,
                                    const pcl::PointCloud<pcl::PointNormal>& thinned,
                                    const PlanarSegmentation& segmentation, double max_distance,
-                                   std::vector<int>* nearest, const std::function<void(std::size_t)>& on_progress) {
+                                   std::vector<int>* nearest, const std::function<void(std::size_t)>& on_progress,
+                                   unsigned int threads) {
   if (segmentation.labels.size() != thinned.size())
     throw InvalidInputError("labelsFromThinned: " + std::to_string(segmentation.labels.size()) + " labels for " +
                             std::to_string(thinned.size()) + " thinned points");
@@ -288,22 +291,23 @@ std::vector<int> labelsFromThinned(const pcl::PointCloud<pcl::PointNormal>& clou
     }
   std::vector<int> labels(cloud.size(), -1);
   if (nearest) nearest->assign(cloud.size(), -1);
+  if (finite->empty()) {
+    for (const auto& p : cloud)
+      if (pcl::isFinite(p))
+        throw InvalidInputError("labelsFromThinned: the thinned cloud has no finite point to label from");
+    if (on_progress) on_progress(cloud.size());
+    return labels;
+  }
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  if (!finite->empty()) tree.setInputCloud(finite);
+  tree.setInputCloud(finite);
   // A point near an edge or at a plane's rim can have an unlabelled kept point, or one of the
   // other plane, nearest: the nearest of a few that puts it on its plane labels it.
   constexpr int kCandidates = 8;
-  pcl::Indices found(kCandidates);
-  std::vector<float> squared(kCandidates);
-  constexpr std::size_t kProgressStep = 4096;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (on_progress && i % kProgressStep == 0 && i > 0) on_progress(i);
+  const auto labelPoint = [&](std::size_t i, pcl::Indices& found, std::vector<float>& squared) {
     const auto& p = cloud[i];
-    if (!pcl::isFinite(p)) continue;
-    if (finite->empty())
-      throw InvalidInputError("labelsFromThinned: the thinned cloud has no finite point to label from");
+    if (!pcl::isFinite(p)) return;
     const int count = tree.nearestKSearch(pcl::PointXYZ(p.x, p.y, p.z), kCandidates, found, squared);
-    if (count < 1) continue;
+    if (count < 1) return;
     if (nearest) (*nearest)[i] = finite_index[static_cast<std::size_t>(found[0])];
     const Eigen::Vector3d position = p.getVector3fMap().cast<double>();
     for (int k = 0; k < count; ++k) {  // nearest first
@@ -311,11 +315,27 @@ std::vector<int> labelsFromThinned(const pcl::PointCloud<pcl::PointNormal>& clou
       if (label < 0) continue;
       if (std::abs(segmentation.planes[static_cast<std::size_t>(label)].signedDistance(position)) <= max_distance) {
         labels[i] = label;
-        break;
+        return;
       }
     }
+  };
+  // Chunks searched in parallel (the tree is only read), with the progress callback between them:
+  // it may throw (an interrupt), which must not happen inside a parallel region.
+  constexpr std::size_t kChunk = 1 << 16;
+  const int team = threads > 0 ? static_cast<int>(threads) : omp_get_max_threads();
+  for (std::size_t begin = 0; begin < cloud.size(); begin += kChunk) {
+    const auto end = static_cast<std::ptrdiff_t>(std::min(cloud.size(), begin + kChunk));
+#pragma omp parallel num_threads(team)
+    {
+      pcl::Indices found(kCandidates);
+      std::vector<float> squared(kCandidates);
+#pragma omp for schedule(static)
+      for (std::ptrdiff_t i = static_cast<std::ptrdiff_t>(begin); i < end; ++i)
+        labelPoint(static_cast<std::size_t>(i), found, squared);
+    }
+    if (on_progress) on_progress(static_cast<std::size_t>(end));
   }
-  if (on_progress) on_progress(cloud.size());
+  if (on_progress && cloud.empty()) on_progress(0);
   return labels;
 }
 
