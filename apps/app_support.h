@@ -109,8 +109,8 @@ struct FusionFlags {
   double contradiction_radius;
   double join_distance;
 
-  /// Adds --align-unseen, --clip-margin, --tilt-margin, --fill-box, --unseen-points, --contradiction-radius and
-  /// --join-distance, bound to the fields above.
+  /// Adds --align-unseen, --clip-margin, --tilt-margin, --fill-box, --unseen-points,
+  /// --contradiction-radius and --join-distance, bound to the fields above.
   void addTo(boost::program_options::options_description& options);
   /// Throws UsageError when a value is out of range.
   void validate() const;

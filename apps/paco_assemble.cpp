@@ -37,7 +37,8 @@ void printHelp(const po::options_description& options) {
             << "                watertight subset by a binary program (CBC by default). Best quality.\n"
             << "  cell-complex  adaptive space partition by the planes + inside/outside min-cut. Fast.\n\n"
             << "Exit status: 0 on success; 1 when the reconstruction fails (too few planes, parallel\n"
-            << "planes, solver failure or time-out, empty or non-watertight result); 2 for bad usage.\n";
+            << "planes, solver failure or time-out, empty or non-watertight result); 2 for bad usage;\n"
+            << "130 when interrupted (Ctrl-C).\n";
 }
 
 /// The planar primitives of an input file, in the working frame of its coordinate offset
@@ -176,6 +177,7 @@ int run(int argc, char** argv) {
     std::printf("pre-processing: %zu planes merged as near-duplicates, %zu dropped (too few points, or over the "
                 "candidate-face budget)\n",
                 result.num_merged, result.num_dropped);
+  if (result.status == paco::AssemblyStatus::Interrupted) throw paco::InterruptedError(result.message);
   if (!result.ok())
     throw paco::Error("assembly failed (" + paco::toString(result.status) + "): " + result.message);
   if (assembler.getBackend() == paco::AssemblyBackend::PolyFit) {

@@ -196,6 +196,7 @@ int run(int argc, char** argv) {
   paco::SurfaceMesh mesh;
   const paco::AssemblyResult& result = assembler.reconstruct(mesh);
   timer.stop();
+  if (result.status == paco::AssemblyStatus::Interrupted) throw paco::InterruptedError(result.message);
   if (!result.ok())
     throw paco::Error("assembly (" + o.assembler + ") failed: " + paco::toString(result.status) +
                       (result.message.empty() ? "" : ": " + result.message));

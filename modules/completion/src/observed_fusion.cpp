@@ -956,7 +956,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     // points ran down below the eaves (tens of metres sideways on an airborne roof), and the cell
     // complex closed a solid there. Along an axis it lies parallel to it may run on, like any seen
     // face. With two perpendicular seen planes it is left alone: on MFCAD's chamfers the cell
-    // complex lost more than PolyFit gained, and on AHN3_16627 PolyFit lost its walls.
+    // complex lost more than PolyFit gained, and PolyFit's mesh of AHN3_16627 split in two.
     const double sin_tilt = std::sin(max_angle), cos_tilt = std::cos(max_angle);
     const double margin = options.tilt_margin * diagonalOf(observed);
     for (std::size_t c = 0; c < completed.size(); ++c) {

@@ -152,7 +152,8 @@ struct ObservedFusionReport {
   std::size_t clipped_points = 0;  ///< completed points dropped outside the observed box + margin
   std::size_t clipped = 0;         ///< unseen completed primitives dropped by the clip
   /// The network's points of seen faces tilted against the box (more than max_angle_degrees off
-  /// every box axis), dropped past the box along the axes the face tilts towards
+  /// every box axis), dropped past the box along the axes the face tilts towards (only when no
+  /// two seen planes are perpendicular; ObservedFusionOptions::tilt_margin)
   std::size_t tilted_points = 0;
   std::size_t filled_points = 0;   ///< box-face points added where nothing covered the box
   std::size_t filled_faces = 0;    ///< box faces added as new primitives (the rest joined one)

@@ -58,11 +58,10 @@ ThinningReport thinToPointBudget(const pcl::PointCloud<PointT>& input, std::size
 /// point (-1 for a non-finite point), e.g. to copy normals estimated on the thinned copy. Why:
 /// segmenting 10 million points took minutes; one nearest-neighbour query per point takes
 /// seconds. The points are searched on `threads` threads (0: OpenMP's default, all cores), in
-/// chunks of 65,536; `on_progress`,
-/// when given, is called between chunks with the number of points done (a progress bar; an
-/// interrupt can throw from it). Throws InvalidInputError
-/// when `segmentation.labels` does not have one label per thinned point, a label names no plane,
-/// or `thinned` has no finite point while `cloud` has one.
+/// chunks of 65,536; `on_progress`, when given, is called between chunks with the number of
+/// points done (a progress bar; an interrupt can throw from it). Throws InvalidInputError when
+/// `segmentation.labels` does not have one label per thinned point, a label names no plane, or
+/// `thinned` has no finite point while `cloud` has one.
 std::vector<int> labelsFromThinned(const pcl::PointCloud<pcl::PointNormal>& cloud,
                                    const pcl::PointCloud<pcl::PointNormal>& thinned,
                                    const PlanarSegmentation& segmentation, double max_distance,
