@@ -327,11 +327,17 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
                                               : " (box fill to the guessed extent)",
               describe(report).c_str());
   if ((report.box_on_one_plane || report.box_on_mirror_pair) && report.filled_points > 0 && !knowledge.scanner_position)
+    // Without a known extent the level box of a roof's slopes ends at the lowest seen point: the
+    // roof closes at its eaves.
     std::printf("  note: no two seen planes are perpendicular, so the box that closes the hidden side %s; if the "
                 "scanner looked from one direction (airborne LiDAR with Z up: --seen-from 0,0,1), say so, and the "
-                "box's walls follow its lines of sight\n",
+                "box's walls follow its lines of sight%s\n",
                 report.box_on_one_plane ? "is turned onto the largest seen plane"
-                                        : "lies on the bisectors of mirror-image seen planes (a roof's slopes)");
+                                        : "lies on the bisectors of mirror-image seen planes (a roof's slopes)",
+                report.box_on_mirror_pair && knowledge.known_extent.empty()
+                    ? "; the box ends at the lowest seen point: a point on the ground (--known-extent X,Y,Z) "
+                      "takes the walls down to it"
+                    : "");
   if (knowledge.known_extent_is_box) {
     // The fill's box lies on the seen axes: turned from the input's, it encloses the corners of the
     // given box with a larger one (AHN3_02373 seen from above: 48.9 x 41.5 m for a 37.7 x 23.1 m

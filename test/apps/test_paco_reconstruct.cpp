@@ -585,6 +585,11 @@ TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirectio
   ASSERT_EQ(paco::test::runCommand(base, &log), 0) << log;
   EXPECT_NE(log.find(note), std::string::npos) << log;
   EXPECT_NE(log.find("--seen-from 0,0,1), say so"), std::string::npos) << log;
+  const std::string ground = "a point on the ground (--known-extent X,Y,Z) takes the walls down to it";
+  EXPECT_NE(log.find(ground), std::string::npos) << log;
+  ASSERT_EQ(paco::test::runCommand(base + " --known-extent 5,0,-1", &log), 0) << log;  // given: no hint
+  EXPECT_NE(log.find(note), std::string::npos) << log;
+  EXPECT_EQ(log.find(ground), std::string::npos) << log;
   ASSERT_EQ(paco::test::runCommand(base + " --seen-from 0,0,1", &log), 0) << log;
   EXPECT_EQ(log.find(note), std::string::npos) << log;
   EXPECT_EQ(log.find("no two seen planes are perpendicular"), std::string::npos) << log;
