@@ -572,7 +572,8 @@ void writeGableRoof(const std::string& path, double heading_degrees) {
 
 // No two seen planes of the roof are perpendicular, so the box fill's box is a guess (on the
 // slopes' bisectors), and the tool says that --seen-from would set its walls along the lines of
-// sight. With it, the note is gone.
+// sight, and, unless --known-extent is given, that a point on the ground takes the walls down to it.
+// With --seen-from, the note is gone.
 TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirection) {
   TempDir dir;
   paco::PacoNetwork network(paco::test::tinyModelConfig());
