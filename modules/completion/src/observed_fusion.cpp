@@ -828,8 +828,10 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       throw InvalidInputError("fuseWithObserved: known extent point " + std::to_string(i) + " is not finite");
   ObservedFusionReport counts;
   const double max_angle = degreesToRadians(options.max_angle_degrees);
-  const double max_distance = options.max_distance * diagonalOf(observed);
-  const double join_distance = options.join_distance * diagonalOf(observed);
+  // The observed points' diagonal: every tolerance below is a fraction of it.
+  const double diagonal = diagonalOf(observed);
+  const double max_distance = options.max_distance * diagonal;
+  const double join_distance = options.join_distance * diagonal;
 
   std::vector<std::size_t> order(observed.size());
   std::iota(order.begin(), order.end(), 0);
@@ -903,7 +905,6 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       if (snapped[c])
         for (const auto& p : predicted_points[c]) queries.push_back(position(p));
     const std::vector<double> to_scan = nearestDistances(queries, scan);
-    const double diagonal = diagonalOf(observed);
     std::size_t first = 0;
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (!snapped[c]) continue;
@@ -958,7 +959,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     // face. With two perpendicular seen planes it is left alone: on MFCAD's chamfers the cell
     // complex lost more than PolyFit gained, and PolyFit's mesh of AHN3_16627 split in two.
     const double sin_tilt = std::sin(max_angle), cos_tilt = std::cos(max_angle);
-    const double margin = options.tilt_margin * diagonalOf(observed);
+    const double margin = options.tilt_margin * diagonal;
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (!snapped[c] || absorbed[c]) continue;
       const Eigen::Vector3d along_axes = (seen_box.axes.transpose() * completed[c].plane.normal).cwiseAbs();
@@ -994,7 +995,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     }
   }
   if ((options.scanner_position || options.scanner_direction.squaredNorm() > 0.0) && !observed.empty()) {
-    const ScannerView scanner(observed, options, diagonalOf(observed));
+    const ScannerView scanner(observed, options, diagonal);
     // Seen points stay by construction (each is in its own bin, and no nearer than itself).
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (absorbed[c] || clipped[c]) continue;
