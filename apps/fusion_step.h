@@ -338,6 +338,13 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
                     ? "; the box ends at the lowest seen point: a point on the ground (--known-extent X,Y,Z) "
                       "takes the walls down to it"
                     : "");
+  if (report.no_seen_plane_along_sight && report.filled_points > 0 && knowledge.known_extent.empty())
+    // The scanner's direction levels the box, but with no wall seen nothing says how far down the
+    // object goes: AHN3_02373 closes at its eaves, 2.6 m thick, and the cell complex drops a low
+    // wing whose solid is then a sliver.
+    std::printf("  note: no seen plane runs along the scanner's lines of sight (no wall seen), so the box that closes "
+                "the hidden side ends at the seen point farthest from the scanner; a point on the ground "
+                "(--known-extent X,Y,Z) takes the walls down to it\n");
   if (knowledge.known_extent_is_box) {
     // The fill's box lies on the seen axes: turned from the input's, it encloses the corners of the
     // given box with a larger one (AHN3_02373 seen from above: 48.9 x 41.5 m for a 37.7 x 23.1 m

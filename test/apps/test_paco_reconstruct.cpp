@@ -573,7 +573,7 @@ void writeGableRoof(const std::string& path, double heading_degrees) {
 // No two seen planes of the roof are perpendicular, so the box fill's box is a guess (on the
 // slopes' bisectors), and the tool says that --seen-from would set its walls along the lines of
 // sight, and, unless --known-extent is given, that a point on the ground takes the walls down to it.
-// With --seen-from, the note is gone.
+// With --seen-from 0,0,1, that note is gone, but no wall is seen, so the ground hint stays.
 TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirection) {
   TempDir dir;
   paco::PacoNetwork network(paco::test::tinyModelConfig());
@@ -594,6 +594,16 @@ TEST(PacoReconstruct, AScanWithoutPerpendicularPlanesSuggestsTheScannersDirectio
   ASSERT_EQ(paco::test::runCommand(base + " --seen-from 0,0,1", &log), 0) << log;
   EXPECT_EQ(log.find(note), std::string::npos) << log;
   EXPECT_EQ(log.find("no two seen planes are perpendicular"), std::string::npos) << log;
+  // Seen from above, no wall is seen either: the ground hint stays, unless the ground is given.
+  const std::string no_wall = "no seen plane runs along the scanner's lines of sight (no wall seen)";
+  EXPECT_NE(log.find(no_wall), std::string::npos) << log;
+  EXPECT_NE(log.find(ground), std::string::npos) << log;
+  ASSERT_EQ(paco::test::runCommand(base + " --seen-from 0,0,1 --known-extent 5,0,-1", &log), 0) << log;
+  EXPECT_EQ(log.find(no_wall), std::string::npos) << log;
+  EXPECT_EQ(log.find(ground), std::string::npos) << log;
+  // Seen along the ridge, both slopes run along the lines of sight: they bound the depth, no note.
+  ASSERT_EQ(paco::test::runCommand(base + " --seen-from 1,0,0", &log), 0) << log;
+  EXPECT_EQ(log.find(no_wall), std::string::npos) << log;
 }
 
 // A --known-extent box lies on the input's axes and the fill's box on the seen faces': when they

@@ -790,6 +790,7 @@ TEST(ObservedFusion, CompletedPointsAScannerAtAPointWouldHaveSeenAreDropped) {
 // under the lowest seen point. Without the scanner, the slopes are mirror images of each other and
 // their bisectors give the same box; with one slope much smaller than the other, the box takes the
 // larger slope's normal as an axis and closes the hidden side with a floor parallel to that slope.
+// Seen from above, no seen plane runs along the lines of sight (no wall): the report says so.
 TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
   const Eigen::Matrix3d heading =
       Eigen::AngleAxisd(degreesToRadians(30.0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -870,9 +871,17 @@ TEST(ObservedFusion, ADistantScannersLinesOfSightAreAnAxisOfTheSeenBox) {
     ASSERT_GT(report.filled_faces, 0u);
     EXPECT_FALSE(report.box_on_one_plane);
     EXPECT_FALSE(report.box_on_mirror_pair);
+    EXPECT_TRUE(report.no_seen_plane_along_sight);  // no wall: the box ends at the eaves
     ASSERT_EQ(level.size(), 2u + report.filled_faces);
     expectALevelBox(level, 2);
   }
+  // Seen along the ridge, the slopes run along the lines of sight; without a scanner, no flag.
+  options.scanner_direction = ridge;
+  fuseWithObserved({}, observed, options, &report);
+  EXPECT_FALSE(report.no_seen_plane_along_sight);
+  options.scanner_direction = Eigen::Vector3d::Zero();
+  fuseWithObserved({}, observed, options, &report);
+  EXPECT_FALSE(report.no_seen_plane_along_sight);
 }
 
 // A gable roof seen from above, turned 30 degrees about the vertical: no two seen planes are

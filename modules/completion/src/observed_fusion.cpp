@@ -946,6 +946,12 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
   SeenBox seen_box = seenBox(observed, seen_normals);
   counts.box_on_one_plane = seen_normals.axes_on_one_plane;
   counts.box_on_mirror_pair = seen_normals.axes_on_mirror_pair;
+  if (options.scanner_direction.squaredNorm() > 0.0 && !seen_normals.normals.empty()) {
+    const Eigen::Vector3d sight = options.scanner_direction.normalized();
+    counts.no_seen_plane_along_sight =
+        std::none_of(seen_normals.normals.begin(), seen_normals.normals.end(),
+                     [&](const Eigen::Vector3d& n) { return std::abs(n.dot(sight)) < std::sin(max_angle); });
+  }
   counts.box_axes = seen_box.axes;
   if (!seen_box.box.isEmpty())
     for (const Eigen::Vector3d& p : options.known_extent_points) seen_box.box.extend(seen_box.axes.transpose() * p);

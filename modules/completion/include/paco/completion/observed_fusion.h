@@ -176,6 +176,12 @@ struct ObservedFusionReport {
   /// (a gable or hip roof's slopes): the box lies on their bisectors (paco::mirrorPlaneAxes),
   /// level under a symmetric roof. Still a guess without the scanner's direction.
   bool box_on_mirror_pair = false;
+  /// A distant scanner's direction was given (ObservedFusionOptions::scanner_direction), and no
+  /// trusted seen plane runs along its lines of sight (within max_angle_degrees: no wall seen, as
+  /// on an airborne scan of a roof). The box then ends at the seen point farthest from the
+  /// scanner (the lowest eave), so the hidden side closes there unless known_extent_points reach
+  /// further (a point on the ground).
+  bool no_seen_plane_along_sight = false;
   /// The seen box's axes (the columns, a rotation), in the primitives' frame: a known extent is
   /// enclosed by a box on these axes (known_extent_points).
   Eigen::Matrix3d box_axes = Eigen::Matrix3d::Identity();
