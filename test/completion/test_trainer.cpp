@@ -9,12 +9,22 @@
 #include <shapes.h>
 #include <test_support.h>
 
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <limits>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <numeric>
+#include <sstream>
+#include <thread>
 
 using namespace paco::completion;
 
@@ -227,46 +237,59 @@ TEST(Trainer, ResumeContinuesExactlyAsAnUninterruptedRun) {
   EXPECT_FALSE(straight.interrupted());
   EXPECT_EQ(straight.globalStep(), 6);
 
-  // Same run, interrupted after step 4 (inside epoch 2), then resumed by a new trainer.
-  TrainerOptions broken_options = tinyOptions(dir.file("broken"));
-  broken_options.epochs = 2;
-  broken_options.on_step = [](std::int64_t step) {
-    if (step == 4) paco::setInterruptRequested(true);
-  };
-  {
-    Trainer first(broken_options);
-    const auto records = first.fit(train, val);
-    paco::setInterruptRequested(false);
-    EXPECT_TRUE(first.interrupted());
-    EXPECT_EQ(records.size(), 1u);
-    EXPECT_EQ(first.globalStep(), 4);
+  // Same run, interrupted after step 4 (inside epoch 2), after step 6 (epoch 2's last batch, before
+  // its validation), or in epoch 2's validation (step 7: none), then resumed by a new trainer. The
+  // second must neither train epoch 2 again nor log it without its validation loss.
+  for (const std::int64_t interrupt_at : {4, 6, 7}) {
+    SCOPED_TRACE(interrupt_at);
+    const std::string folder = dir.file("broken" + std::to_string(interrupt_at));
+    TrainerOptions broken_options = tinyOptions(folder);
+    broken_options.epochs = 2;
+    broken_options.on_step = [interrupt_at](std::int64_t step) {
+      if (step == interrupt_at) paco::setInterruptRequested(true);
+    };
+    BatchSource interrupted_val = val;  // one batch per validation; the second is epoch 2's
+    auto val_batches = std::make_shared<int>(0);
+    interrupted_val.load = [&val, val_batches, interrupt_at](const std::vector<std::size_t>& indices,
+                                                             std::uint64_t seed) {
+      if (++*val_batches == 2 && interrupt_at == 7) paco::setInterruptRequested(true);
+      return val.load(indices, seed);
+    };
+    {
+      Trainer first(broken_options);
+      const auto records = first.fit(train, interrupted_val);
+      paco::setInterruptRequested(false);
+      EXPECT_TRUE(first.interrupted());
+      EXPECT_EQ(records.size(), 1u);
+      EXPECT_EQ(first.globalStep(), std::min<std::int64_t>(interrupt_at, 6));
+    }
+    broken_options.on_step = nullptr;
+    broken_options.seed = 999;  // ignored: the checkpoint's seed drives the data order
+    Trainer second(broken_options);
+    second.resume(folder + "/last.pt");
+    EXPECT_EQ(second.epoch(), 1);
+    EXPECT_EQ(second.epochBatch(), static_cast<std::size_t>(std::min<std::int64_t>(interrupt_at, 6) - 3));
+    EXPECT_EQ(second.globalStep(), std::min<std::int64_t>(interrupt_at, 6));
+    EXPECT_EQ(second.trainSamples(), 6u);
+    const auto records = second.fit(train, val);
+    ASSERT_EQ(records.size(), 1u);
+    EXPECT_EQ(second.globalStep(), 6);
+    EXPECT_NEAR(records[0].train_loss, straight_records[1].train_loss, 1e-6 * std::abs(straight_records[1].train_loss));
+    EXPECT_NEAR(records[0].val_loss, straight_records[1].val_loss, 1e-6 * std::abs(straight_records[1].val_loss));
+
+    EXPECT_LT(maxWeightDifference(straight, second), 1e-6);
+
+    // Files: last + best checkpoints and a CSV with a header and one row per finished epoch.
+    for (const char* name : {"last.pt", "best.pt", "training_log.csv"})
+      EXPECT_TRUE(std::filesystem::exists(folder + "/" + name)) << name;
+    std::ifstream csv(folder + "/training_log.csv");
+    std::string header, line;
+    std::getline(csv, header);
+    EXPECT_EQ(header.rfind("epoch,step,lr,train_loss,train_classification", 0), 0u);
+    int rows = 0;
+    while (std::getline(csv, line)) ++rows;
+    EXPECT_EQ(rows, 2);
   }
-  broken_options.on_step = nullptr;
-  broken_options.seed = 999;  // ignored: the checkpoint's seed drives the data order
-  Trainer second(broken_options);
-  second.resume(dir.file("broken") + "/last.pt");
-  EXPECT_EQ(second.epoch(), 1);
-  EXPECT_EQ(second.epochBatch(), 1u);
-  EXPECT_EQ(second.globalStep(), 4);
-  EXPECT_EQ(second.trainSamples(), 6u);
-  const auto records = second.fit(train, val);
-  ASSERT_EQ(records.size(), 1u);
-  EXPECT_EQ(second.globalStep(), 6);
-  EXPECT_NEAR(records[0].train_loss, straight_records[1].train_loss, 1e-6 * std::abs(straight_records[1].train_loss));
-  EXPECT_NEAR(records[0].val_loss, straight_records[1].val_loss, 1e-6 * std::abs(straight_records[1].val_loss));
-
-  EXPECT_LT(maxWeightDifference(straight, second), 1e-6);
-
-  // Files: last + best checkpoints and a CSV with a header and one row per finished epoch.
-  for (const char* name : {"last.pt", "best.pt", "training_log.csv"})
-    EXPECT_TRUE(std::filesystem::exists(dir.file("broken") + "/" + name)) << name;
-  std::ifstream csv(dir.file("broken") + "/training_log.csv");
-  std::string header, line;
-  std::getline(csv, header);
-  EXPECT_EQ(header.rfind("epoch,step,lr,train_loss,train_classification", 0), 0u);
-  int rows = 0;
-  while (std::getline(csv, line)) ++rows;
-  EXPECT_EQ(rows, 2);
 }
 
 TEST(Trainer, PeriodicCheckpointSurvivesAKilledRun) {
@@ -536,5 +559,73 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
       << output;
   EXPECT_NE(output.find("the run had 10 training samples per epoch and this command gives 6"), std::string::npos)
       << output;
+}
+
+// The rows of a paco_train run's training_log.csv (its header left out; 0 while it does not exist).
+int loggedEpochs(const std::string& run) {
+  std::ifstream csv(run + "/training_log.csv");
+  std::string line;
+  int rows = -1;
+  while (std::getline(csv, line)) ++rows;
+  return std::max(rows, 0);
+}
+
+// A real Ctrl-C, not the flag set in-process: SIGINT reaches paco_train while it trains (once its
+// first epoch is logged, with a thousand to go, so the signal cannot come too late), the run stops
+// with exit code 130 and its state saved, and --resume finishes it with every step of every epoch.
+TEST(PacoTrainTool, ASignalStopsTrainingAndTheRunResumes) {
+  const std::string tool = paco::test::toolPath("paco_train");
+  if (!std::filesystem::exists(tool)) GTEST_SKIP() << "paco_train is not built";
+  paco::test::TempDir dir;
+  writeTinyDataset(dir.file("data"), "shape", 3);  // 6 training samples: 3 steps of 2 per epoch
+  {
+    std::ofstream config(dir.file("tiny.json"));
+    config << tinyConfig().toJson();
+  }
+  const std::string run = dir.file("run");
+  std::vector<std::string> args = {tool, dir.file("data"), "-o", run, "--config", dir.file("tiny.json"),
+                                   "--batch", "2", "--threads", "1", "--input-points", "256", "--gt-points", "512",
+                                   "--quiet", "--epochs", "1000"};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const std::string log = dir.file("log.txt");
+  posix_spawn_file_actions_t files;
+  posix_spawn_file_actions_init(&files);
+  posix_spawn_file_actions_addopen(&files, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&files, STDOUT_FILENO, STDERR_FILENO);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, tool.c_str(), &files, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&files);
+  const auto started = std::chrono::steady_clock::now();
+  while (loggedEpochs(run) < 1 && std::chrono::steady_clock::now() - started < std::chrono::minutes(3))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const bool training = loggedEpochs(run) >= 1;
+  ::kill(pid, training ? SIGINT : SIGKILL);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  std::stringstream output;
+  output << std::ifstream(log).rdbuf();
+  ASSERT_TRUE(training) << "no epoch logged in 3 minutes\n" << output.str();
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status) << "\n" << output.str();
+  EXPECT_EQ(WEXITSTATUS(status), 130) << output.str();
+  const std::string text = output.str();
+  const std::string saved = "interrupted: state saved to '" + run + "/last.pt' (epoch ";
+  const std::size_t at = text.find(saved);
+  ASSERT_NE(at, std::string::npos) << text;
+  const int epochs_done = std::stoi(text.substr(at + saved.size()));
+  EXPECT_GE(epochs_done, 1) << text;
+  EXPECT_EQ(loggedEpochs(run), epochs_done) << text;
+
+  std::string resumed;
+  const std::string resume = tool + " " + dir.file("data") + " -o " + run +
+                             " --batch 2 --threads 1 --input-points 256 --gt-points 512 --quiet --resume --epochs " +
+                             std::to_string(epochs_done + 1);
+  ASSERT_EQ(paco::test::runCommand(resume, &resumed), 0) << resumed;
+  const int epochs = epochs_done + 1;
+  EXPECT_NE(resumed.find("done: " + std::to_string(epochs) + " epochs, " + std::to_string(3 * epochs) + " steps"),
+            std::string::npos)
+      << resumed;
+  EXPECT_EQ(loggedEpochs(run), epochs) << resumed;
 }
 #endif

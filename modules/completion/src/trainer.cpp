@@ -365,6 +365,7 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
   if (train.size == 0 || !train.load)
     throw InvalidInputError("Trainer::fit: no training samples; check the dataset folder and --limit-train");
   interrupted_ = false;
+  const std::size_t resumed_train_samples = train_samples_;  // 0 unless resumed from a run that recorded it
   train_samples_ = train.size;
   const auto B = static_cast<std::size_t>(options_.batch_size);
   const std::size_t batches_per_epoch = (train.size + B - 1) / B;
@@ -377,7 +378,12 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
     const auto started = std::chrono::steady_clock::now();
     const double lr = learningRateAt(epoch_);
     setLearningRate(lr);
-    if (epoch_batch_ >= batches_per_epoch) epoch_batch_ = 0;  // e.g. resumed with fewer samples
+    // Resumed after the last batch of an epoch (stopped before its validation): the epoch goes on to
+    // validation, rather than training every batch again. Past the end, or at it with other data
+    // (fewer batches than the run had), the epoch starts over.
+    if (epoch_batch_ > batches_per_epoch ||
+        (epoch_batch_ == batches_per_epoch && resumed_train_samples != train.size))
+      epoch_batch_ = 0;
     const auto order = epochOrder(train.size, options_.seed, epoch_);
     std::vector<std::vector<std::size_t>> batches;
     std::vector<std::uint64_t> seeds;
@@ -466,7 +472,14 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
         }
       }
       if (val_bar) val_bar->finish();
-      if (!interrupted_ && count > 0) {
+      if (interrupted_) {
+        // Every batch is trained, the validation is not done: the resumed run validates this
+        // epoch (epoch_batch_ stays at the end), so that no epoch is logged without its loss and
+        // best.pt is chosen as in an uninterrupted run.
+        save("last.pt");
+        return records;
+      }
+      if (count > 0) {
         record.val_loss = loss_sum / static_cast<double>(count);
         record.val_metrics = metrics;
       }
@@ -486,7 +499,6 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
     save("last.pt");
     appendLog(record);
     records.push_back(record);
-    if (interrupted_) return records;
   }
   return records;
 }
