@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -218,6 +219,33 @@ TEST(SurfaceMesh, RandomStarShapedFacesAreCutIntoTrianglesOfTheirExactArea) {
     EXPECT_NEAR(area, shoelace, 1e-9 * std::max(1.0, shoelace)) << "trial " << trial << ", " << n << " corners";
   }
   EXPECT_GT(non_convex, 100u);  // the test is about non-convex faces
+}
+
+// The same box listed in a shuffled order, each face starting at another corner, one corner at -0:
+// sorted, both lists are identical, and the box is still a closed outward solid.
+TEST(SurfaceMesh, SortingCanonicallyListsTheSameSurfaceInOneOrder) {
+  paco::SurfaceMesh a = box(1, 2, 3);
+  paco::SurfaceMesh b = a;
+  std::vector<std::uint32_t> to_shuffled = {5, 2, 7, 0, 3, 6, 1, 4};
+  b.vertices.assign(8, Eigen::Vector3d::Zero());
+  for (std::uint32_t v = 0; v < 8; ++v) b.vertices[to_shuffled[v]] = a.vertices[v];
+  b.vertices[to_shuffled[0]].x() = -0.0;
+  for (auto& face : b.faces) {
+    for (auto& v : face) v = to_shuffled[v];
+    std::rotate(face.begin(), face.begin() + 1, face.end());
+  }
+  std::reverse(b.faces.begin(), b.faces.end());
+  ASSERT_NE(a.faces, b.faces);
+  paco::sortMeshCanonically(a);
+  paco::sortMeshCanonically(b);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_FALSE(std::signbit(b.vertices[0].x()));  // printed as 0, not -0
+  EXPECT_EQ(b.vertices.front(), Eigen::Vector3d(0, 0, 0));
+  EXPECT_EQ(b.vertices.back(), Eigen::Vector3d(1, 2, 3));
+  for (const auto& face : b.faces) EXPECT_EQ(*std::min_element(face.begin(), face.end()), face.front());
+  EXPECT_TRUE(paco::analyseTopology(b).isClosedManifold());
+  EXPECT_NEAR(paco::signedVolume(b), 6.0, 1e-12);
 }
 
 TEST(SurfaceMesh, ValidateRejectsBadIndicesAndNaN) {

@@ -9,11 +9,6 @@
 #include <shapes.h>
 #include <test_support.h>
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -23,8 +18,6 @@
 #include <fstream>
 #include <memory>
 #include <numeric>
-#include <sstream>
-#include <thread>
 
 using namespace paco::completion;
 
@@ -583,33 +576,19 @@ TEST(PacoTrainTool, ASignalStopsTrainingAndTheRunResumes) {
     config << tinyConfig().toJson();
   }
   const std::string run = dir.file("run");
-  std::vector<std::string> args = {tool, dir.file("data"), "-o", run, "--config", dir.file("tiny.json"),
-                                   "--batch", "2", "--threads", "1", "--input-points", "256", "--gt-points", "512",
-                                   "--quiet", "--epochs", "1000"};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
   const std::string log = dir.file("log.txt");
-  posix_spawn_file_actions_t files;
-  posix_spawn_file_actions_init(&files);
-  posix_spawn_file_actions_addopen(&files, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&files, STDOUT_FILENO, STDERR_FILENO);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, tool.c_str(), &files, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&files);
-  const auto started = std::chrono::steady_clock::now();
-  while (loggedEpochs(run) < 1 && std::chrono::steady_clock::now() - started < std::chrono::minutes(3))
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  const bool training = loggedEpochs(run) >= 1;
-  ::kill(pid, training ? SIGINT : SIGKILL);
-  int status = 0;
-  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-  std::stringstream output;
-  output << std::ifstream(log).rdbuf();
-  ASSERT_TRUE(training) << "no epoch logged in 3 minutes\n" << output.str();
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status) << "\n" << output.str();
-  EXPECT_EQ(WEXITSTATUS(status), 130) << output.str();
-  const std::string text = output.str();
+  int code = 0;
+  {
+    paco::test::BackgroundTool training({tool, dir.file("data"), "-o", run, "--config", dir.file("tiny.json"), "--batch",
+                                         "2", "--threads", "1", "--input-points", "256", "--gt-points", "512", "--quiet",
+                                         "--epochs", "1000"},
+                                        log);
+    ASSERT_TRUE(training.waitUntil([&] { return loggedEpochs(run) >= 1; }, 180.0))
+        << "no epoch logged in 3 minutes\n" << paco::test::readBytes(log);
+    code = training.signalAndWait(SIGINT);
+  }
+  const std::string text = paco::test::readBytes(log);
+  EXPECT_EQ(code, 130) << text;
   const std::string saved = "interrupted: state saved to '" + run + "/last.pt' (epoch ";
   const std::size_t at = text.find(saved);
   ASSERT_NE(at, std::string::npos) << text;

@@ -1,13 +1,21 @@
 #include "test_support.h"
 
 #include <array>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
 
 namespace paco::test {
 
@@ -64,6 +72,50 @@ int runCommand(const std::string& command, std::string* output) {
   const int status = pclose(pipe);
   if (output) *output = text;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+BackgroundTool::BackgroundTool(const std::vector<std::string>& args, const std::string& log_path) {
+  std::vector<std::string> owned = args;
+  std::vector<char*> argv;
+  for (auto& a : owned) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t files;
+  posix_spawn_file_actions_init(&files);
+  posix_spawn_file_actions_addopen(&files, STDOUT_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&files, STDOUT_FILENO, STDERR_FILENO);
+  const int error = posix_spawn(&pid_, argv[0], &files, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&files);
+  if (error != 0) throw std::runtime_error("BackgroundTool: cannot start '" + args.at(0) + "'");
+}
+
+BackgroundTool::~BackgroundTool() {
+  if (running()) signalAndWait(SIGKILL);
+}
+
+bool BackgroundTool::running() {
+  if (ended_) return false;
+  ended_ = waitpid(pid_, &status_, WNOHANG) == pid_;
+  return !ended_;
+}
+
+bool BackgroundTool::waitUntil(const std::function<bool()>& ready, double timeout_seconds) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_seconds);
+  while (!ready()) {
+    if (!running() || std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+int BackgroundTool::signalAndWait(int signal) {
+  if (running()) {
+    kill(pid_, signal);
+    pid_t reaped;
+    do reaped = waitpid(pid_, &status_, 0);
+    while (reaped == -1 && errno == EINTR);
+    ended_ = true;
+  }
+  return WIFEXITED(status_) ? WEXITSTATUS(status_) : -WTERMSIG(status_);
 }
 
 }  // namespace paco::test

@@ -1,9 +1,13 @@
 #pragma once
 // Helpers for paco's tests: a temporary folder removed at the end, and the shared data folder
 // (../shared next to the checkout) that tests may use only when present.
+#include <sys/types.h>
+
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace paco::test {
 
@@ -38,5 +42,27 @@ int runCommand(const std::string& command, std::string* output = nullptr);
 
 /// `s` in single quotes, for a path in a runCommand command line (test paths hold no quote).
 inline std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+/// A tool started in the background (`args[0]` is its path), its stdout and stderr both into
+/// `log_path`: for tests that signal a running tool as a user's Ctrl-C would. The destructor
+/// kills and reaps it if it still runs.
+class BackgroundTool {
+ public:
+  BackgroundTool(const std::vector<std::string>& args, const std::string& log_path);
+  ~BackgroundTool();
+  BackgroundTool(const BackgroundTool&) = delete;
+  BackgroundTool& operator=(const BackgroundTool&) = delete;
+  /// Polls `ready` until it holds (true), the tool ends or `timeout_seconds` pass (false).
+  bool waitUntil(const std::function<bool()>& ready, double timeout_seconds);
+  /// Sends `signal` (unless the tool already ended) and waits for the end: the exit code, or
+  /// minus the signal's number when a signal ended it (a shell would report 128 + it).
+  int signalAndWait(int signal);
+
+ private:
+  bool running();
+  pid_t pid_ = -1;
+  int status_ = 0;
+  bool ended_ = false;
+};
 
 }  // namespace paco::test

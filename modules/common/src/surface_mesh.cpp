@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <unordered_map>
 
 namespace paco {
@@ -205,6 +206,29 @@ void boundingBox(const SurfaceMesh& mesh, Eigen::Vector3d& min, Eigen::Vector3d&
 
 void flipFaces(SurfaceMesh& mesh) {
   for (auto& f : mesh.faces) std::reverse(f.begin(), f.end());
+}
+
+void sortMeshCanonically(SurfaceMesh& mesh) {
+  for (auto& v : mesh.vertices) v = v + Eigen::Vector3d::Zero();  // -0 + 0 is +0: one text for zero
+  std::vector<std::uint32_t> order(mesh.vertices.size());
+  std::iota(order.begin(), order.end(), 0u);
+  const auto lexicographic = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return lexicographic(mesh.vertices[a], mesh.vertices[b]); });
+  std::vector<std::uint32_t> new_index(order.size());
+  std::vector<Eigen::Vector3d> vertices(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    new_index[order[i]] = static_cast<std::uint32_t>(i);
+    vertices[i] = mesh.vertices[order[i]];
+  }
+  mesh.vertices = std::move(vertices);
+  for (auto& face : mesh.faces) {
+    for (auto& v : face) v = new_index.at(v);
+    std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
+  }
+  std::sort(mesh.faces.begin(), mesh.faces.end());
 }
 
 void triangulateFace(const SurfaceMesh& mesh, std::size_t face, std::vector<std::vector<std::uint32_t>>& out) {

@@ -81,6 +81,7 @@ SurfaceMesh toSurfaceMesh(const Nef& nef) {
   for (const auto& polygon : polygons) mesh.faces.emplace_back(polygon.begin(), polygon.end());
   weldVertices(mesh, 0.0);  // shells share no vertex; merge exact duplicates only
   if (signedVolume(mesh) < 0.0) flipFaces(mesh);
+  sortMeshCanonically(mesh);  // Nef's order follows heap addresses: the same seed, other bytes
   return mesh;
 }
 

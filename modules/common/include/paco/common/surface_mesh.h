@@ -59,6 +59,12 @@ Eigen::Vector3d faceNormal(const SurfaceMesh& mesh, std::size_t face);
 void boundingBox(const SurfaceMesh& mesh, Eigen::Vector3d& min, Eigen::Vector3d& max);
 /// Flips every face (reverses the vertex order).
 void flipFaces(SurfaceMesh& mesh);
+/// Lists the same surface in one order, whatever order it came in: vertices sorted by their
+/// coordinates (x, then y, then z; -0 becomes 0), each face starting at its smallest vertex index
+/// (its orientation kept), faces sorted. CGAL's Nef_polyhedron_3 lists a solid's vertices and
+/// faces in an order that follows heap addresses, which differ from run to run; sorted, a
+/// procedural part's seed gives the same bytes in every process.
+void sortMeshCanonically(SurfaceMesh& mesh);
 /// The triangles of one face, appended to `out`. A convex face is fanned from its first corner. A
 /// non-convex one (an L-shaped top, a step's side; the assemblers merge a plane's faces into such
 /// polygons) is cut by ear clipping in its plane, after its straight corners are dropped, so
