@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <set>
 #include <string>
 #include <tuple>
@@ -40,6 +41,20 @@ std::string writeDataset(const std::string& folder, const std::string& mode = "n
   }
   for (std::size_t i = 0; i < meshes.size(); ++i) writer.write(paco::data::buildPart(names[i], meshes[i], options));
   return "val";
+}
+
+// A test method alone on the dataset's first `limit` parts at 25 % missing, quietly, with few samples.
+ev::BenchmarkOptions oneMethodOptions(const std::string& dataset, const std::string& split, const std::string& method,
+                                      std::size_t limit) {
+  ev::BenchmarkOptions options;
+  options.dataset = dataset;
+  options.split = split;
+  options.methods = {method};
+  options.levels = {0};
+  options.limit = limit;
+  options.progress = false;
+  options.metrics.num_samples = 500;
+  return options;
 }
 
 }  // namespace
@@ -143,6 +158,59 @@ TEST(Benchmark, BadOptionsAreErrors) {
   EXPECT_THROW(ev::runBenchmark(options), paco::IoError);  // no dataset there
 }
 
+// started.log holds each case as it starts. A case Ctrl-C stopped (here a method that throws
+// InterruptedError, as an assembly whose child process was killed for Ctrl-C does) is evaluated
+// again by the next run; a case that started and never reached the CSV killed its process, and
+// is recorded as failed instead of run again.
+TEST(Benchmark, ACaseCtrlCStoppedRunsAgainAndOneThatCrashedIsRecordedAsFailed) {
+  paco::test::TempDir dir;
+  const std::string split = writeDataset(dir.file("ds"));
+  static int calls = 0;
+  calls = 0;
+  ev::registerMethod(
+      "test-stopped-once", [](const ev::MethodInput&, const ev::MethodOptions&) -> ev::MethodOutput {
+        if (calls++ == 0) {
+          paco::setInterruptRequested(true);
+          throw paco::InterruptedError("assembly interrupted");
+        }
+        ev::MethodOutput out;
+        out.reason = ev::FailureReason::NoMesh;
+        out.message = "evaluated";
+        return out;
+      },
+      false);
+  ev::BenchmarkOptions options = oneMethodOptions(dir.file("ds"), split, "test-stopped-once", 2);
+  options.jobs = 1;
+  options.output_dir = dir.file("out");
+  paco::setInterruptRequested(false);
+  const ev::BenchmarkRun stopped = ev::runBenchmark(options);
+  paco::setInterruptRequested(false);
+  EXPECT_TRUE(stopped.interrupted);
+  EXPECT_EQ(stopped.cases_evaluated, 0u);
+  EXPECT_TRUE(ev::readRecords(stopped.csv_path).empty());
+
+  const ev::BenchmarkRun resumed = ev::runBenchmark(options);
+  EXPECT_FALSE(resumed.interrupted);
+  const auto records = ev::readRecords(resumed.csv_path);
+  ASSERT_EQ(records.size(), 2u);
+  for (const auto& r : records) EXPECT_EQ(r.message, "evaluated") << r.key();
+
+  // A run whose journal says the first case started, and whose CSV does not have it.
+  options.output_dir = dir.file("crashed");
+  std::filesystem::create_directories(options.output_dir);
+  paco::test::writeBytes(dir.file("crashed/started.log"), records[0].key() + "\n");
+  const auto after_crash = ev::readRecords(ev::runBenchmark(options).csv_path);
+  ASSERT_EQ(after_crash.size(), 2u);
+  for (const auto& r : after_crash) {
+    if (r.key() == records[0].key()) {
+      EXPECT_EQ(r.reason, ev::FailureReason::Threw);
+      EXPECT_NE(r.message.find("killed an earlier evaluation process"), std::string::npos) << r.message;
+    } else {
+      EXPECT_EQ(r.message, "evaluated") << r.key();
+    }
+  }
+}
+
 TEST(Benchmark, NoNormalsOptionHandsTheMethodsBarePoints) {
   paco::test::TempDir dir;
   const std::string split = writeDataset(dir.file("ds"));
@@ -157,14 +225,7 @@ TEST(Benchmark, NoNormalsOptionHandsTheMethodsBarePoints) {
         return out;
       },
       false);
-  ev::BenchmarkOptions options;
-  options.dataset = dir.file("ds");
-  options.split = split;
-  options.methods = {"test-count-normals"};
-  options.levels = {0};
-  options.limit = 1;
-  options.progress = false;
-  options.metrics.num_samples = 500;
+  ev::BenchmarkOptions options = oneMethodOptions(dir.file("ds"), split, "test-count-normals", 1);
   for (bool drop : {false, true}) {
     options.drop_input_normals = drop;
     options.output_dir = dir.file(drop ? "bare" : "with");

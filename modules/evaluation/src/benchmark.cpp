@@ -65,6 +65,9 @@ void checkOptions(const BenchmarkOptions& options) {
 
 namespace {
 
+// Starts a started.log line that marks a case Ctrl-C stopped (a key starts with a method's name).
+constexpr char kStoppedMark = '-';
+
 struct Combination {
   std::string method, assembler;
 };
@@ -197,14 +200,20 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
 
   // Journal of started cases. A case started by an earlier run but missing from the CSV killed
   // that process (e.g. an assertion inside a solver): it is recorded as failed, not run again,
-  // so that a resumed run cannot crash on it forever.
+  // so that a resumed run cannot crash on it forever. A case that Ctrl-C stopped has a second
+  // line, kStoppedMark and its key, and is evaluated again.
   const std::string journal_path = (std::filesystem::path(options.output_dir) / "started.log").string();
   std::set<std::string> crashed;
   {
     std::ifstream journal(journal_path);
     std::string key;
-    while (std::getline(journal, key))
-      if (!key.empty() && !done.count(key)) crashed.insert(key);
+    while (std::getline(journal, key)) {
+      if (key.empty()) continue;
+      if (key[0] == kStoppedMark)
+        crashed.erase(key.substr(1));
+      else if (!done.count(key))
+        crashed.insert(key);
+    }
   }
   std::ofstream journal(journal_path, std::ios::app);
   if (!journal) throw IoError("cannot append to '" + journal_path + "'");
@@ -278,6 +287,11 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
             r = evaluateCase(sample, gt_mesh, failure_score, c, options, dataset.info());
           }
         } catch (const InterruptedError&) {
+          // Stopped, not crashed (the assembly's child process was killed for Ctrl-C): the
+          // journal says so, or the next run would record the case as failed.
+          std::lock_guard<std::mutex> lock(mutex);
+          journal << kStoppedMark << key << '\n';
+          journal.flush();
           break;
         } catch (const std::exception& e) {
           // Whatever went wrong, this case fails and the run goes on.
