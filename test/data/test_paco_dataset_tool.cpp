@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <csignal>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -93,6 +94,55 @@ TEST(PacoDatasetTool, TheSameOptionsGiveTheSameBytesInEveryRun) {
       else
         EXPECT_TRUE(files.at(name) == bytes) << other << ": " << name;
     }
+  }
+}
+
+// A real Ctrl-C: SIGINT reaches paco_dataset while it builds (once the index holds a part, with
+// hundreds to go), the run ends with exit code 130 and a consistent index, and the same command
+// builds the rest: the same files as a run never stopped.
+TEST(PacoDatasetTool, ASignalStopsTheBuildAndTheSameCommandFinishesIt) {
+  paco::test::TempDir dir;
+  const std::string tool = paco::test::toolPath("paco_dataset");
+  const auto arguments = [&](const std::string& folder) {
+    std::vector<std::string> words = {tool, "--procedural", "300", folder};
+    std::istringstream small(std::string(kSmall) + " --jobs 2");
+    for (std::string word; small >> word;) words.push_back(word);
+    return words;
+  };
+  const auto command = [&](const std::string& folder) {
+    std::string line;
+    for (const auto& word : arguments(folder)) line += word + " ";
+    return line;
+  };
+  const auto indexRows = [&] {
+    const std::string index = paco::test::readBytes(dir.file("a/index.tsv"));
+    return std::count(index.begin(), index.end(), '\n') - 1;  // less the header
+  };
+  int code = 0;
+  {
+    paco::test::BackgroundTool build(arguments(dir.file("a")), dir.file("log.txt"));
+    ASSERT_TRUE(build.waitUntil([&] { return indexRows() >= 1; }, 120.0)) << paco::test::readBytes(dir.file("log.txt"));
+    code = build.signalAndWait(SIGINT);
+  }
+  const std::string log = paco::test::readBytes(dir.file("log.txt"));
+  EXPECT_EQ(code, 130) << log;
+  EXPECT_NE(log.find("interrupted: the index is consistent; rerun the same command to resume"), std::string::npos) << log;
+  const auto stopped_at = indexRows();
+  EXPECT_GE(stopped_at, 1);
+  EXPECT_LT(stopped_at, 300);
+  EXPECT_EQ(paco::data::Dataset(dir.file("a")).parts().size(), static_cast<std::size_t>(stopped_at));
+
+  std::string resumed;
+  ASSERT_EQ(paco::test::runCommand(command(dir.file("a")), &resumed), 0) << resumed;
+  EXPECT_NE(resumed.find(std::to_string(stopped_at) + " already done"), std::string::npos) << resumed;
+  ASSERT_EQ(paco::test::runCommand(command(dir.file("b")), &resumed), 0) << resumed;
+  const auto a = folderBytes(dir.file("a")), b = folderBytes(dir.file("b"));
+  ASSERT_EQ(a.size(), b.size());
+  for (const auto& [name, bytes] : a) {
+    if (name == "index.tsv")
+      EXPECT_EQ(sortedLines(bytes), sortedLines(b.at(name)));
+    else
+      EXPECT_TRUE(bytes == b.at(name)) << name;
   }
 }
 
