@@ -104,7 +104,7 @@ TEST(PacoDatasetTool, ASignalStopsTheBuildAndTheSameCommandFinishesIt) {
   paco::test::TempDir dir;
   const std::string tool = paco::test::toolPath("paco_dataset");
   const auto arguments = [&](const std::string& folder) {
-    std::vector<std::string> words = {tool, "--procedural", "300", folder};
+    std::vector<std::string> words = {tool, "--procedural", "600", folder};
     std::istringstream small(std::string(kSmall) + " --jobs 2");
     for (std::string word; small >> word;) words.push_back(word);
     return words;
@@ -129,7 +129,7 @@ TEST(PacoDatasetTool, ASignalStopsTheBuildAndTheSameCommandFinishesIt) {
   EXPECT_NE(log.find("interrupted: the index is consistent; rerun the same command to resume"), std::string::npos) << log;
   const auto stopped_at = indexRows();
   EXPECT_GE(stopped_at, 1);
-  EXPECT_LT(stopped_at, 300);
+  EXPECT_LT(stopped_at, 600);
   EXPECT_EQ(paco::data::Dataset(dir.file("a")).parts().size(), static_cast<std::size_t>(stopped_at));
 
   std::string resumed;
