@@ -274,20 +274,20 @@ void FusionFlags::addTo(boost::program_options::options_description& options) {
 
 void FusionFlags::validate() const {
   if (!(align_unseen_degrees >= 0.0 && align_unseen_degrees < 90.0))
-    throw UsageError("--align-unseen must be in [0, 90) degrees, got " + std::to_string(align_unseen_degrees));
+    throw UsageError("--align-unseen must be in [0, 90) degrees, got " + shortNumber(align_unseen_degrees));
   // 0.001 is paco::kMinFillSpacing; app_support does not depend on the completion module.
   if (!(fill_box_spacing == 0.0 || (fill_box_spacing >= 0.001 && fill_box_spacing < 1.0)))
     throw UsageError("--fill-box must be 0 (off) or in [0.001, 1) (a fraction of the diagonal), got " +
-                     std::to_string(fill_box_spacing));
+                     shortNumber(fill_box_spacing));
   if (!(unseen_point_fraction > 0.0 && unseen_point_fraction <= 1.0))
     throw UsageError("--unseen-points must be in (0, 1] (a fraction of the points), got " +
-                     std::to_string(unseen_point_fraction));
+                     shortNumber(unseen_point_fraction));
   if (!(contradiction_radius >= 0.0 && contradiction_radius < 1.0))
     throw UsageError("--contradiction-radius must be 0 (off) or in (0, 1) (a fraction of the diagonal), got " +
-                     std::to_string(contradiction_radius));
+                     shortNumber(contradiction_radius));
   if (!(join_distance >= 0.0 && join_distance < 1.0))
     throw UsageError("--join-distance must be in [0, 1) (a fraction of the diagonal), got " +
-                     std::to_string(join_distance));
+                     shortNumber(join_distance));
   parseNonNegativeOrOff("--clip-margin", clip_margin);
   parseNonNegativeOrOff("--tilt-margin", tilt_margin);
 }
