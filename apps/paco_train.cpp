@@ -569,10 +569,11 @@ int run(int argc, char** argv) {
   paco::InterruptGuard guard;
   const auto records = trainer.fit(train, val);
   for (const auto& r : records)
-    std::printf("epoch %d: step %lld, lr %.3g, train loss %s, val loss %s, val recall %s, NC_prim %s, %.1f samples/s (%s)\n",
+    std::printf("epoch %d: step %lld, lr %.3g, train loss %s, val loss %s, val recall %s, NC_prim %s, %s samples/s (%s)\n",
                 r.epoch, static_cast<long long>(r.step), r.learning_rate, formatValue(r.train_loss).c_str(),
                 formatValue(r.val_loss).c_str(), formatValue(r.val_metrics.recall).c_str(),
-                formatValue(r.val_metrics.nc_prim).c_str(), r.samples_per_second, r.step_times.summary().c_str());
+                formatValue(r.val_metrics.nc_prim).c_str(), formatValue(r.samples_per_second).c_str(),
+                r.step_times.summary().c_str());
   if (trainer.interrupted()) {
     std::printf("interrupted: state saved to '%s' (epoch %d, step %lld); continue with --resume\n",
                 last.string().c_str(), trainer.epoch(), static_cast<long long>(trainer.globalStep()));

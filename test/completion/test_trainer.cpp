@@ -269,6 +269,8 @@ TEST(Trainer, ResumeContinuesExactlyAsAnUninterruptedRun) {
     EXPECT_EQ(second.globalStep(), 6);
     EXPECT_NEAR(records[0].train_loss, straight_records[1].train_loss, 1e-6 * std::abs(straight_records[1].train_loss));
     EXPECT_NEAR(records[0].val_loss, straight_records[1].val_loss, 1e-6 * std::abs(straight_records[1].val_loss));
+    // Resumed at the validation, no sample was trained in this run: the rate is unknown, not 0.
+    EXPECT_EQ(std::isnan(records[0].samples_per_second), interrupt_at >= 6) << records[0].samples_per_second;
 
     EXPECT_LT(maxWeightDifference(straight, second), 1e-6);
 

@@ -442,7 +442,9 @@ std::vector<EpochRecord> Trainer::fit(const BatchSource& train, const BatchSourc
     const double batches_done = static_cast<double>(std::max<std::size_t>(epoch_batch_, 1));
     record.train_loss = epoch_loss_sum_ / batches_done;
     for (const auto& [name, sum] : epoch_term_sums_) record.train_terms[name] = sum / batches_done;
-    record.samples_per_second = train_seconds > 0 ? samples_done / train_seconds : 0.0;
+    // Resumed straight into the validation, the epoch trained nothing in this run: no rate.
+    record.samples_per_second = samples_done > 0 && train_seconds > 0 ? samples_done / train_seconds
+                                                                       : std::numeric_limits<double>::quiet_NaN();
     record.step_times = epoch_times;
     record.val_loss = std::numeric_limits<double>::quiet_NaN();
     if (val.size > 0 && val.load) {

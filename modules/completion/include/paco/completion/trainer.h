@@ -76,7 +76,7 @@ struct EpochRecord {
   double val_loss = 0.0;                  ///< NaN without validation data
   PlaneMetrics val_metrics;
   double seconds = 0.0;                   ///< wall time of the epoch (training + validation)
-  double samples_per_second = 0.0;        ///< training throughput
+  double samples_per_second = 0.0;        ///< training throughput in this run (NaN: no sample trained in it)
   StepTimes step_times;                   ///< where this call's training time went
 };
 
