@@ -278,6 +278,17 @@ int run(int argc, char** argv) {
   }
   if (o.views < 1 || o.views > 255) throw paco::app::UsageError("--views must be in 1..255");
   if (o.stride < 1) throw paco::app::UsageError("--stride must be at least 1");
+  if (!o.only_split.empty()) {
+    try {
+      paco::data::splitFromString(o.only_split);
+    } catch (const paco::InvalidInputError& e) {
+      throw paco::app::UsageError(std::string("--only-split: ") + e.what());
+    }
+  }
+  // They choose among MESH_DIR's meshes; ignored, they would build every procedural part.
+  if (mesh_dir.empty() && (!o.only_split.empty() || o.stride > 1 || o.limit > 0))
+    throw paco::app::UsageError("--only-split, --stride and --limit choose among MESH_DIR's meshes; with --procedural "
+                                "alone, --procedural N sets how many parts are built");
   paco::app::validateThreads("--jobs", o.jobs);
   if (!(o.noise >= 0.0)) throw paco::app::UsageError("--noise must be >= 0");
   if (o.input_points < 1 || o.gt_points < 1 || o.dense_points < o.input_points)

@@ -146,6 +146,24 @@ TEST(PacoDatasetTool, ASignalStopsTheBuildAndTheSameCommandFinishesIt) {
   }
 }
 
+// --only-split, --stride and --limit choose among MESH_DIR's meshes. With --procedural alone they
+// were ignored (every part was built); a split that does not exist was only found after the scan.
+TEST(PacoDatasetTool, MeshChoiceOptionsNeedMeshesAndAKnownSplit) {
+  paco::test::TempDir dir;
+  const std::string tool = paco::test::toolPath("paco_dataset");
+  std::string log;
+  for (const char* option : {" --only-split val", " --stride 2", " --limit 3"}) {
+    EXPECT_EQ(paco::test::runCommand(tool + " --procedural 4 " + dir.file("p") + option, &log), 2) << option;
+    EXPECT_NE(log.find("choose among MESH_DIR's meshes"), std::string::npos) << log;
+  }
+  std::filesystem::create_directories(dir.file("meshes"));
+  paco::io::saveMesh(dir.file("meshes/good.obj"), paco::test::makeLBracket());
+  EXPECT_EQ(paco::test::runCommand(tool + " " + dir.file("meshes") + " " + dir.file("m") + " --only-split value", &log), 2);
+  EXPECT_NE(log.find("--only-split: unknown split 'value': use train, val or test"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("p")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m")));
+}
+
 TEST(PacoDatasetTool, BadMeshesAreListedNotFatal) {
   paco::test::TempDir dir;
   std::filesystem::create_directories(dir.file("meshes"));

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <string>
 #include <tuple>
@@ -155,6 +156,28 @@ TEST(Benchmark, BadOptionsAreErrors) {
   options.method.segment_min_points = 2;
   EXPECT_THROW(ev::runBenchmark(options), paco::InvalidInputError);
   options.method.segment_min_points = 0;
+  // Method options no case could run with fail before any case runs, not as a failure in each.
+  const ev::MethodOptions good = options.method;
+  const std::vector<std::pair<std::function<void(ev::MethodOptions&)>, std::string>> bad = {
+      {[](ev::MethodOptions& m) { m.segmenter = "no-such-segmenter"; }, "choose one of: gocopp"},
+      {[](ev::MethodOptions& m) { m.completion_frame = "paper"; }, "not one of: own, complete"},
+      {[](ev::MethodOptions& m) { m.confidence_threshold = 1.5; }, "in [0, 1], got 1.5"},
+      {[](ev::MethodOptions& m) { m.confidence_threshold = std::nan(""); }, "in [0, 1], got nan"},
+      {[](ev::MethodOptions& m) { m.qem_target_faces = 3; }, "at least 4 faces, got 3"}};
+  const auto available = ev::availableMethods();
+  const bool segments = std::find(available.begin(), available.end(), "direct") != available.end();
+  for (const auto& [spoil, message] : bad) {
+    if (!segments && message.rfind("choose one of", 0) == 0) continue;  // no segmenter in this build
+    options.method = good;
+    spoil(options.method);
+    try {
+      ev::runBenchmark(options);
+      ADD_FAILURE() << "no error; expected one saying " << message;
+    } catch (const paco::InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+  options.method = good;
   EXPECT_THROW(ev::runBenchmark(options), paco::IoError);  // no dataset there
 }
 

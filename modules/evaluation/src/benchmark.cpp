@@ -28,6 +28,7 @@ void checkOptions(const BenchmarkOptions& options) {
   if (options.dataset.empty()) throw InvalidInputError("runBenchmark: no dataset folder given");
   if (options.output_dir.empty()) throw InvalidInputError("runBenchmark: no output folder given");
   if (options.methods.empty()) throw InvalidInputError("runBenchmark: no method given");
+  validateMethodOptions(options.method);
   if (options.jobs < 1) throw InvalidInputError("runBenchmark: jobs must be at least 1");
   if (options.levels.empty() || options.views.empty()) throw InvalidInputError("runBenchmark: no level or no view given");
   for (int level : options.levels)

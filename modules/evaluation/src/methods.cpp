@@ -32,6 +32,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <sstream>
 
 namespace paco::evaluation {
 
@@ -402,6 +403,22 @@ bool methodUsesAssembler(const std::string& name) {
   auto it = registry().find(name);
   if (it != registry().end()) return it->second.uses_assembler;
   return name != "poisson-qem" && name != "sanity";
+}
+
+void validateMethodOptions(const MethodOptions& options) {
+#ifdef PACO_EVALUATION_WITH_SEGMENTATION
+  makePlanarSegmenter<pcl::PointNormal>(options.segmenter);  // throws, naming the known ones
+#endif
+  if (options.completion_frame != "own" && options.completion_frame != "complete")
+    throw InvalidInputError("completion frame '" + options.completion_frame + "' is not one of: own, complete");
+  if (!(options.confidence_threshold >= 0.0 && options.confidence_threshold <= 1.0)) {
+    std::ostringstream threshold;
+    threshold << options.confidence_threshold;
+    throw InvalidInputError("the confidence threshold must be in [0, 1], got " + threshold.str());
+  }
+  if (options.qem_target_faces < 4)
+    throw InvalidInputError("poisson-qem needs a target of at least 4 faces, got " +
+                            std::to_string(options.qem_target_faces));
 }
 
 MethodOutput runMethod(const std::string& name, const MethodInput& input, const MethodOptions& options) {

@@ -164,6 +164,11 @@ std::vector<std::string> availableMethods();
 std::vector<std::string> knownMethods();
 /// True when the method runs once per assembler; false for poisson-qem and sanity.
 bool methodUsesAssembler(const std::string& name);
+/// Throws InvalidInputError, saying which option and why, for options no case could run with: an
+/// unknown segmenter (or one this build lacks), a completion frame other than own or complete, a
+/// confidence threshold outside [0, 1], fewer than 4 poisson-qem faces. runBenchmark calls it
+/// first, so that a typo fails at once rather than as a failure in every case.
+void validateMethodOptions(const MethodOptions& options);
 /// Runs a method; throws InvalidInputError for a name not in availableMethods() (saying what the
 /// build lacks), never for a failure of the method (that is in MethodOutput::reason).
 MethodOutput runMethod(const std::string& name, const MethodInput& input, const MethodOptions& options);
