@@ -380,6 +380,17 @@ std::string readFile(const std::string& path) {
   return text.str();
 }
 
+// `make()`, with a bad value named in it (paco::InvalidInputError) turned into a usage error: exit
+// code 2, as for every other bad option.
+template <typename Make>
+auto usageChecked(const char* option, Make make) {
+  try {
+    return make();
+  } catch (const paco::InvalidInputError& e) {
+    throw paco::app::UsageError(std::string(option) + ": " + e.what());
+  }
+}
+
 std::string formatValue(double v) {
   if (!std::isfinite(v)) return "-";
   char buffer[32];
@@ -467,8 +478,8 @@ int run(int argc, char** argv) {
     throw paco::app::UsageError("--input-frame must be 'complete' or 'own'");
   if (o.input_orientation != "as-is" && o.input_orientation != "seen-planes")
     throw paco::app::UsageError("--input-orientation must be 'as-is' or 'seen-planes'");
-  if (o.augment_scale < 0.0 || o.augment_scale >= 1.0 || o.augment_offset < 0.0)
-    throw paco::app::UsageError("--augment-scale must be in [0, 1) and --augment-offset >= 0");
+  if (!(o.augment_scale >= 0.0 && o.augment_scale < 1.0) || !(o.augment_offset >= 0.0 && std::isfinite(o.augment_offset)))
+    throw paco::app::UsageError("--augment-scale must be in [0, 1) and --augment-offset a number >= 0");
   if (!(o.augment_jitter >= 0.0 && o.augment_jitter < 0.2))
     throw paco::app::UsageError("--augment-jitter must be in [0, 0.2) (a fraction of the unit diagonal)");
   const fs::path last = fs::path(o.output) / "last.pt";
@@ -487,9 +498,10 @@ int run(int argc, char** argv) {
 
   paco::completion::TrainerOptions options;
   if (!o.config_file.empty()) options.model = paco::ModelConfig::fromJson(readFile(o.config_file));
-  else options.model = paco::ModelConfig::preset(o.preset);
+  else options.model = usageChecked("--preset", [&] { return paco::ModelConfig::preset(o.preset); });
   options.model.validate();
-  for (const auto& name : o.disabled_losses) options.loss.disable(name);
+  for (const auto& name : o.disabled_losses)
+    usageChecked("--disable-loss", [&] { options.loss.disable(name); return 0; });
   options.loss.quality_classification = o.quality_classification;
   options.epochs = o.epochs;
   options.batch_size = o.batch;

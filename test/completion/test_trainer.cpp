@@ -534,9 +534,15 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
                                    dir.file("missing.pt"), &output), 0);
   EXPECT_FALSE(std::filesystem::exists(dir.file("run3")));
   // A bad loss name is a usage error.
-  EXPECT_NE(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") +
-                                   " --disable-loss chamfer", &output), 0);
+  EXPECT_EQ(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") +
+                                   " --disable-loss chamfer", &output), 2);
   EXPECT_NE(output.find("known terms"), std::string::npos) << output;
+  // So are an unknown preset and a NaN augmentation (which switched it off without a word).
+  for (const char* bad : {" --preset huge", " --augment-scale nan", " --augment-offset nan"}) {
+    EXPECT_EQ(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") + bad, &output), 2)
+        << bad << "\n" << output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("other")));
   // Several datasets are trained on together.
   writeTinyDataset(dir.file("more"), "more", 2);
   ASSERT_EQ(paco::test::runCommand(tool + " " + dir.file("data") + " " + dir.file("more") + " -o " + dir.file("run4") +
