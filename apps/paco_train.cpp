@@ -465,6 +465,8 @@ int run(int argc, char** argv) {
   if (o.output.empty()) throw paco::app::UsageError("expected -o CHECKPOINT_DIR");
   paco::app::validateThreads("--threads", o.threads);
   if (o.epochs < 0) throw paco::app::UsageError("--epochs must be >= 0, got " + std::to_string(o.epochs));
+  // A new run of 0 epochs writes nothing (it said "checkpoints in" a folder it never made).
+  if (o.epochs == 0 && !o.resume) throw paco::app::UsageError("--epochs must be at least 1 for a new run");
   if (o.batch < 1) throw paco::app::UsageError("--batch must be at least 1, got " + std::to_string(o.batch));
   if (!(o.lr > 0.0)) throw paco::app::UsageError("--lr must be more than 0, got " + paco::app::shortNumber(o.lr));
   if (o.input_points < 1 || o.gt_points < 1)

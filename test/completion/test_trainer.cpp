@@ -537,8 +537,9 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
   EXPECT_EQ(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") +
                                    " --disable-loss chamfer", &output), 2);
   EXPECT_NE(output.find("known terms"), std::string::npos) << output;
-  // So are an unknown preset and a NaN augmentation (which switched it off without a word).
-  for (const char* bad : {" --preset huge", " --augment-scale nan", " --augment-offset nan"}) {
+  // So are an unknown preset, a NaN augmentation (which switched it off without a word) and a new
+  // run of no epoch (which said "checkpoints in" a folder it never made).
+  for (const char* bad : {" --preset huge", " --augment-scale nan", " --augment-offset nan", " --epochs 0"}) {
     EXPECT_EQ(paco::test::runCommand(tool + " " + dir.file("data") + " -o " + dir.file("other") + bad, &output), 2)
         << bad << "\n" << output;
   }
