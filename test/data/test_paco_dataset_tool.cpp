@@ -73,9 +73,9 @@ std::map<std::string, std::string> folderBytes(const std::string& folder) {
 }
 
 // The same options give the same bytes in another process and with other --jobs (the index's rows
-// come in the order the parts finished). CGAL's Nef
-// solids list their faces in an order that follows heap addresses, and before the meshes were
-// sorted, about one part in ten came out in another order (and so with other samples) in every run.
+// come in the order the parts finished). CGAL's Nef solids list their faces in an order that
+// follows heap addresses, and before the meshes were sorted, about one part in ten came out in
+// another order (and so with other samples) in every run.
 TEST(PacoDatasetTool, TheSameOptionsGiveTheSameBytesInEveryRun) {
   paco::test::TempDir dir;
   const std::string command = paco::test::toolPath("paco_dataset") + " --procedural 40" + kSmall;
