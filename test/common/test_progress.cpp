@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -58,6 +61,32 @@ TEST(ProgressBar, WritesALineToANonTerminalWhenTheIntervalHasPassed) {
   EXPECT_NE(text.find(" 3/1000 "), std::string::npos) << text;
   EXPECT_EQ(text.find(" 2/1000 "), std::string::npos) << text;
   EXPECT_NE(text.find(" 4/1000 "), std::string::npos) << text;
+}
+
+// A second Ctrl-C ends the process with 130 at once, writing the note first (in a child process,
+// since it ends the process).
+TEST(InterruptGuard, ASecondSigintEndsTheProcessAfterWritingTheNote) {
+  int pipe_ends[2];
+  ASSERT_EQ(pipe(pipe_ends), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    close(pipe_ends[0]);
+    paco::InterruptGuard guard;
+    paco::setHardInterruptNote(pipe_ends[1], "stopped hard\n");
+    std::raise(SIGINT);  // sets the flag
+    std::raise(SIGINT);  // ends the process
+    _exit(1);
+  }
+  close(pipe_ends[1]);
+  char buffer[64] = {};
+  const ssize_t n = read(pipe_ends[0], buffer, sizeof buffer - 1);
+  close(pipe_ends[0]);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_EQ(std::string(buffer, n > 0 ? static_cast<std::size_t>(n) : 0), "stopped hard\n");
 }
 
 TEST(InterruptGuard, SigintSetsFlagInsteadOfKilling) {

@@ -182,9 +182,10 @@ TEST(Benchmark, BadOptionsAreErrors) {
 }
 
 // started.log holds each case as it starts. A case Ctrl-C stopped (here a method that throws
-// InterruptedError, as an assembly whose child process was killed for Ctrl-C does) is evaluated
-// again by the next run; a case that started and never reached the CSV killed its process, and
-// is recorded as failed instead of run again.
+// InterruptedError, as an assembly whose child process was killed for Ctrl-C does), or one in
+// flight when a second Ctrl-C ended the run, is evaluated again by the next run; a case that
+// started and never reached the CSV otherwise killed its process, and is recorded as failed
+// instead of run again.
 TEST(Benchmark, ACaseCtrlCStoppedRunsAgainAndOneThatCrashedIsRecordedAsFailed) {
   paco::test::TempDir dir;
   const std::string split = writeDataset(dir.file("ds"));
@@ -218,10 +219,13 @@ TEST(Benchmark, ACaseCtrlCStoppedRunsAgainAndOneThatCrashedIsRecordedAsFailed) {
   ASSERT_EQ(records.size(), 2u);
   for (const auto& r : records) EXPECT_EQ(r.message, "evaluated") << r.key();
 
-  // A run whose journal says the first case started, and whose CSV does not have it.
+  // A journal whose first run started the first case and died (a crash), and whose second run
+  // started the other case and was ended by a second Ctrl-C (the handler's "-*" line); the CSV has
+  // neither. Only the first is recorded as failed; the other runs again.
   options.output_dir = dir.file("crashed");
   std::filesystem::create_directories(options.output_dir);
-  paco::test::writeBytes(dir.file("crashed/started.log"), records[0].key() + "\n");
+  paco::test::writeBytes(dir.file("crashed/started.log"),
+                         "+\n" + records[0].key() + "\n+\n" + records[1].key() + "\n-*\n");
   const auto after_crash = ev::readRecords(ev::runBenchmark(options).csv_path);
   ASSERT_EQ(after_crash.size(), 2u);
   for (const auto& r : after_crash) {
@@ -232,6 +236,11 @@ TEST(Benchmark, ACaseCtrlCStoppedRunsAgainAndOneThatCrashedIsRecordedAsFailed) {
       EXPECT_EQ(r.message, "evaluated") << r.key();
     }
   }
+  // This run wrote its "+" and the one case it ran.
+  const std::string journal = paco::test::readBytes(dir.file("crashed/started.log"));
+  const std::string this_run = "-*\n+\n" + records[1].key() + "\n";
+  ASSERT_GE(journal.size(), this_run.size());
+  EXPECT_EQ(journal.substr(journal.size() - this_run.size()), this_run) << journal;
 }
 
 TEST(Benchmark, NoNormalsOptionHandsTheMethodsBarePoints) {

@@ -13,11 +13,29 @@ std::atomic<bool> g_interrupt_requested{false};
 std::atomic<int> g_guards{0};
 struct sigaction g_old_int, g_old_term;
 
+std::atomic<int> g_note_fd{-1};
+std::atomic<const char*> g_note_text{nullptr};
+
 extern "C" void onInterruptSignal(int) {
   // A second Ctrl-C while the first is being honoured ends the process at once.
-  if (g_interrupt_requested.exchange(true)) std::_Exit(130);
+  if (g_interrupt_requested.exchange(true)) {
+    const int fd = g_note_fd.load();
+    const char* text = g_note_text.load();
+    if (fd >= 0 && text) {
+      std::size_t length = 0;
+      while (text[length]) ++length;  // strlen is not async-signal-safe by the letter of POSIX
+      [[maybe_unused]] const ssize_t written = ::write(fd, text, length);
+    }
+    std::_Exit(130);
+  }
 }
 }  // namespace
+
+void setHardInterruptNote(int fd, const char* text) {
+  g_note_fd.store(-1);  // never a new fd with the old text, or the reverse
+  g_note_text.store(text);
+  g_note_fd.store(fd);
+}
 
 bool interruptRequested() { return g_interrupt_requested.load(); }
 void setInterruptRequested(bool requested) { g_interrupt_requested.store(requested); }

@@ -8,6 +8,9 @@
 #include <paco/data/dataset.h>
 #endif
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -66,8 +69,12 @@ void checkOptions(const BenchmarkOptions& options) {
 
 namespace {
 
-// Starts a started.log line that marks a case Ctrl-C stopped (a key starts with a method's name).
+// started.log: a line that starts with this marks a case Ctrl-C stopped (a key starts with a
+// method's name); a run starts with kRunStart; kHardStop ends a run that a second Ctrl-C ended.
 constexpr char kStoppedMark = '-';
+constexpr const char* kRunStart = "+";
+constexpr const char* kHardStop = "-*";
+constexpr const char* kHardStopLine = "-*\n";
 
 struct Combination {
   std::string method, assembler;
@@ -202,22 +209,45 @@ BenchmarkRun runBenchmark(const BenchmarkOptions& options) {
   // Journal of started cases. A case started by an earlier run but missing from the CSV killed
   // that process (e.g. an assertion inside a solver): it is recorded as failed, not run again,
   // so that a resumed run cannot crash on it forever. A case that Ctrl-C stopped has a second
-  // line, kStoppedMark and its key, and is evaluated again.
+  // line, kStoppedMark and its key, and is evaluated again. Each run starts with kRunStart; a
+  // second Ctrl-C, which ends the process at once, leaves kHardStop: that run's unfinished cases
+  // were stopped too, not crashed.
   const std::string journal_path = (std::filesystem::path(options.output_dir) / "started.log").string();
   std::set<std::string> crashed;
   {
     std::ifstream journal(journal_path);
     std::string key;
+    std::vector<std::string> unfinished_in_run;
     while (std::getline(journal, key)) {
       if (key.empty()) continue;
-      if (key[0] == kStoppedMark)
+      if (key == kRunStart) {
+        unfinished_in_run.clear();
+      } else if (key == kHardStop) {
+        for (const auto& k : unfinished_in_run) crashed.erase(k);
+        unfinished_in_run.clear();
+      } else if (key[0] == kStoppedMark) {
         crashed.erase(key.substr(1));
-      else if (!done.count(key))
+      } else if (!done.count(key)) {
         crashed.insert(key);
+        unfinished_in_run.push_back(key);
+      }
     }
   }
   std::ofstream journal(journal_path, std::ios::app);
   if (!journal) throw IoError("cannot append to '" + journal_path + "'");
+  journal << kRunStart << '\n';
+  journal.flush();
+  // Its own descriptor for the signal handler, appending as the stream does; closed on the way out.
+  struct HardStopNote {
+    int fd;
+    explicit HardStopNote(const std::string& path) : fd(::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC)) {
+      setHardInterruptNote(fd, kHardStopLine);
+    }
+    ~HardStopNote() {
+      setHardInterruptNote(-1, nullptr);
+      if (fd >= 0) ::close(fd);
+    }
+  } hard_stop_note(journal_path);
 
   run.cases_total = indices.size() * combinations.size();
   std::ofstream csv(run.csv_path, std::ios::app);

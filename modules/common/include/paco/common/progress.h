@@ -56,5 +56,10 @@ class InterruptGuard {
 bool interruptRequested();
 /// For tests and for code that stops work itself.
 void setInterruptRequested(bool requested);
+/// Before a second Ctrl-C (or SIGTERM) ends the process at once, it writes `text` to the file
+/// descriptor `fd` (write(2) is all a signal handler may do): a line in a journal, say, that tells
+/// the next run why the work in flight never finished. `fd` < 0: nothing. `text` must outlive the
+/// setting (a string literal).
+void setHardInterruptNote(int fd, const char* text);
 
 }  // namespace paco
