@@ -1,6 +1,8 @@
 #pragma once
 // Shared plumbing of the paco_* tools: error reporting with a non-zero exit, timing, and output
 // files that appear only when complete (never a partial file after an error or Ctrl-C).
+#include <paco/common/error.h>
+
 #include <Eigen/Core>
 #include <boost/program_options.hpp>
 
@@ -30,6 +32,19 @@ int runTool(const std::string& tool_name, const std::function<int()>& body);
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+/// Runs `work` (setting up a library object from the command line's values) and returns what it
+/// returns; a paco::InvalidInputError from it, whose message names the bad value, becomes a
+/// UsageError (exit 2, as for every other bad option), its message after `prefix` (e.g. the
+/// option's name and ": ").
+template <typename Work>
+auto usageErrorIfInvalid(Work work, const std::string& prefix = "") {
+  try {
+    return work();
+  } catch (const paco::InvalidInputError& e) {
+    throw UsageError(prefix + e.what());
+  }
+}
 
 /// Parses the command line with boost::program_options; a malformed command line (unknown
 /// option, missing value, bad number, a negative number for an unsigned option) becomes a

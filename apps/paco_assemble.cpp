@@ -138,7 +138,7 @@ int run(int argc, char** argv) {
                           merge_distance);
 
   paco::PolygonalAssembler assembler;
-  try {
+  paco::app::usageErrorIfInvalid([&] {
     assembler.setBackend(backend);
     assembler.setMipSolver(solver);
     assembler.setTimeLimit(time_limit);
@@ -150,9 +150,7 @@ int run(int argc, char** argv) {
     assembler.setMergeAngle(paco::degreesToRadians(merge_angle));
     assembler.setMergeDistance(merge_distance);
     assembler.setMaxCandidateFaces(max_candidate_faces);
-  } catch (const paco::InvalidInputError& e) {
-    throw paco::app::UsageError(e.what());
-  }
+  });
   assembler.setVerbose(vm.count("verbose") > 0);
   assembler.setWarmStart(vm.count("no-warm-start") == 0);
 

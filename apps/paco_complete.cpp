@@ -106,12 +106,10 @@ int run(int argc, char** argv) {
   // Check everything that can be checked before the slow work: names, model file, input file.
   paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
   if (!o.use_labels) {
-    try {
+    paco::app::usageErrorIfInvalid([&] {
       segmenter = paco::makePlanarSegmenter<pcl::PointNormal>(o.segmenter);
       segmenter->setDistanceThreshold(o.epsilon);
-    } catch (const paco::InvalidInputError& e) {
-      throw paco::app::UsageError(e.what());
-    }
+    });
   }
   if (o.model.empty()) o.model = paco::CompletionModel::findShippedModel();
   if (o.model.empty())

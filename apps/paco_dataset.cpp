@@ -278,13 +278,8 @@ int run(int argc, char** argv) {
   }
   if (o.views < 1 || o.views > 255) throw paco::app::UsageError("--views must be in 1..255");
   if (o.stride < 1) throw paco::app::UsageError("--stride must be at least 1");
-  if (!o.only_split.empty()) {
-    try {
-      paco::data::splitFromString(o.only_split);
-    } catch (const paco::InvalidInputError& e) {
-      throw paco::app::UsageError(std::string("--only-split: ") + e.what());
-    }
-  }
+  if (!o.only_split.empty())
+    paco::app::usageErrorIfInvalid([&] { return paco::data::splitFromString(o.only_split); }, "--only-split: ");
   // They choose among MESH_DIR's meshes; ignored, they would build every procedural part.
   if (mesh_dir.empty() && (!o.only_split.empty() || o.stride > 1 || o.limit > 0))
     throw paco::app::UsageError("--only-split, --stride and --limit choose among MESH_DIR's meshes; with --procedural "

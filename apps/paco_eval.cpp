@@ -305,11 +305,8 @@ int dataset(const Options& o) {
   if (o.scanner_at_viewpoint && !b.method.fuse_observed)
     throw paco::app::UsageError("--scanner-at-viewpoint works through observed fusion: drop --observed-fusion off");
   b.method.use_scanner_position = o.scanner_at_viewpoint;
-  try {  // a typo here would otherwise fail every case, one by one
-    ev::validateMethodOptions(b.method);
-  } catch (const paco::InvalidInputError& e) {
-    throw paco::app::UsageError(e.what());
-  }
+  // A typo here would otherwise fail every case, one by one.
+  paco::app::usageErrorIfInvalid([&] { ev::validateMethodOptions(b.method); });
   b.metrics.num_samples = o.samples;
   b.failure_box = failureBoxFromName(o.failure_box);
   paco::InterruptGuard guard;

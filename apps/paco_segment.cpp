@@ -188,12 +188,8 @@ int run(int argc, char** argv) {
   paco::app::checkOutputsAreNotInputs({{"INPUT", o.input}}, {{"-o", o.output}, {"--vg", o.vg}});
   // Check every parameter before reading a large file.
   validateOptions(o);
-  paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter;
-  try {
-    segmenter = makeSegmenter(o);
-  } catch (const paco::InvalidInputError& e) {
-    throw paco::app::UsageError(e.what());
-  }
+  const paco::PlanarSegmenter<pcl::PointNormal>::Ptr segmenter =
+      paco::app::usageErrorIfInvalid([&] { return makeSegmenter(o); });
   paco::app::PendingOutput labelled_output(o.output);
   std::unique_ptr<paco::app::PendingOutput> vg_output;
   if (!o.vg.empty()) vg_output = std::make_unique<paco::app::PendingOutput>(o.vg);

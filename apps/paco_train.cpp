@@ -380,17 +380,6 @@ std::string readFile(const std::string& path) {
   return text.str();
 }
 
-// `make()`, with a bad value named in it (paco::InvalidInputError) turned into a usage error: exit
-// code 2, as for every other bad option.
-template <typename Make>
-auto usageChecked(const char* option, Make make) {
-  try {
-    return make();
-  } catch (const paco::InvalidInputError& e) {
-    throw paco::app::UsageError(std::string(option) + ": " + e.what());
-  }
-}
-
 std::string formatValue(double v) {
   if (!std::isfinite(v)) return "-";
   char buffer[32];
@@ -500,10 +489,10 @@ int run(int argc, char** argv) {
 
   paco::completion::TrainerOptions options;
   if (!o.config_file.empty()) options.model = paco::ModelConfig::fromJson(readFile(o.config_file));
-  else options.model = usageChecked("--preset", [&] { return paco::ModelConfig::preset(o.preset); });
+  else options.model = paco::app::usageErrorIfInvalid([&] { return paco::ModelConfig::preset(o.preset); }, "--preset: ");
   options.model.validate();
   for (const auto& name : o.disabled_losses)
-    usageChecked("--disable-loss", [&] { options.loss.disable(name); return 0; });
+    paco::app::usageErrorIfInvalid([&] { options.loss.disable(name); }, "--disable-loss: ");
   options.loss.quality_classification = o.quality_classification;
   options.epochs = o.epochs;
   options.batch_size = o.batch;

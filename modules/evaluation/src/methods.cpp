@@ -44,6 +44,11 @@ static_assert(kDefaultNoiseAdaptation == kScanNoiseMultiple, "the evaluation seg
 
 namespace {
 
+void checkCompletionFrame(const std::string& frame) {
+  if (frame != "own" && frame != "complete")
+    throw InvalidInputError("completion frame '" + frame + "' is not one of: own, complete");
+}
+
 // oracle-seen-hull: a GT face counts as seen from this many of its points in the scan on.
 constexpr std::size_t kMinSeenOraclePoints = 3;
 
@@ -278,8 +283,7 @@ HiddenExtentModel::ConstPtr cachedExtentHead(const std::string& path) {
 static_assert(kMaxEnsembleTurns == paco::kMaxEnsembleTurns, "evaluation restates the completion module's limit");
 
 MethodOutput runPaco(const MethodInput& in, const MethodOptions& options) {
-  if (options.completion_frame != "own" && options.completion_frame != "complete")
-    throw InvalidInputError("completion frame '" + options.completion_frame + "' is not one of: own, complete");
+  checkCompletionFrame(options.completion_frame);
   const std::string path = options.model.empty() ? CompletionModel::findShippedModel() : options.model;
   if (path.empty())
     throw ModelError("the paco method needs a model: none is shipped in this tree; pass --model FILE (paco_train "
@@ -409,8 +413,7 @@ void validateMethodOptions(const MethodOptions& options) {
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
   makePlanarSegmenter<pcl::PointNormal>(options.segmenter);  // throws, naming the known ones
 #endif
-  if (options.completion_frame != "own" && options.completion_frame != "complete")
-    throw InvalidInputError("completion frame '" + options.completion_frame + "' is not one of: own, complete");
+  checkCompletionFrame(options.completion_frame);
   if (!(options.confidence_threshold >= 0.0 && options.confidence_threshold <= 1.0)) {
     std::ostringstream threshold;
     threshold << options.confidence_threshold;
