@@ -636,15 +636,16 @@ std::size_t countPoints(const PlanarPrimitive& primitive, Where where) {
 }
 
 TEST(ObservedFusion, ASeenFacesPredictedPointsWhereTheScanSawNoSuchFaceAreDropped) {
-  // Seen: the top z = 1 (x, y in -0.05..1.05) and a wall x = 0.5 up to z = 0.5 only (a step). The
-  // network spreads the wall's points (rows 0.025 apart) up to z = 1. The observed diagonal is
-  // about 1.78, so the radius 0.03 is 0.053: the wall's two top rows (z = 0.9625 and 0.9875) are
-  // that close to the top's points (its grid has a row at x = 0.5), where the scan saw the top
-  // and no wall, and go. The rows below, down to z = 0.55, are near no seen point: the scan
-  // says nothing there, and they stay.
+  // Seen: the top z = 1 of a block (x in -0.57..0.5, y in -0.03..1.03, its last row at x = 0.5)
+  // and its side, a wall x = 0.5 (normal +x), up to z = 0.5 only. The network spreads the wall's
+  // points (rows 0.025 apart) up to z = 1. The observed diagonal is about 1.8, so the radius 0.03
+  // is 0.054: the wall's two top rows (z = 0.9625 and 0.9875) are that close to the top's last
+  // row, where the scan saw the top and no wall, and go. The rows below, down to z = 0.55, are
+  // near no seen point, and no seen surface hangs over the space in front of them (the top ends
+  // 1.5 radii short of it): the scan says nothing there, and they stay.
   const Plane top = Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1});
   const Plane wall = Plane::fromPointAndNormal({0.5, 0, 0}, {1, 0, 0});
-  const std::vector<PlanarPrimitive> observed = {patch(top, {0.5, 0.5, 1}, 1.1, 23, 1.0f),
+  const std::vector<PlanarPrimitive> observed = {patch(top, {0.5 - 0.55 * 22.0 / 23.0, 0.5, 1}, 1.1, 23, 1.0f),
                                                  patch(wall, {0.5, 0.5, 0.25}, 0.5, 10, 1.0f)};
   std::vector<PlanarPrimitive> completed = {patch(wall, {0.5, 0.5, 0.5}, 1.0, 40, 0.9f)};
   EXPECT_EQ(ObservedFusionOptions{}.contradiction_radius, 0.03);  // on by default
@@ -703,6 +704,48 @@ TEST(ObservedFusion, ASeenFacesPredictedPointsInsideTheSeenSolidAreDropped) {
   fused = fuseWithObserved(completed, observed, options, &report);
   EXPECT_EQ(countPoints(fused[0], over_the_solid), 0u);
   EXPECT_EQ(countPoints(fused[0], over_the_step), 25u + countPoints(completed[0], over_the_step));
+}
+
+TEST(ObservedFusion, ASeenWallsPredictedPointsPastASeenCeilingAreDropped) {
+  // A pocket: its ceiling z = 0 (normal -z) seen over x in 0..1 and y in 0.05..1.05, and its wall
+  // y = 0 (normal +y) seen below it, z in -0.5..-0.05. The network runs the wall on above the
+  // ceiling, through the solid, up to z = 0.5. The observed diagonal is about 1.48, so the radius
+  // 0.03 is 0.044, the spot checked lies 1.5 radii (0.066) in front of the wall and the reach is 6
+  // radii (0.27). Looking down from the spot in front of a point above the ceiling, the first seen
+  // surface is the ceiling, which faces away: the spot is in the solid, and the point goes. Up to
+  // the reach only: farther up, the line might have crossed an unseen surface first. In the pocket
+  // the ceiling faces the spot, and the points stay.
+  const Plane ceiling = Plane::fromPointAndNormal({0, 0, 0}, {0, 0, -1});
+  const Plane wall = Plane::fromPointAndNormal({0, 0, 0}, {0, 1, 0});
+  const std::vector<PlanarPrimitive> observed = {patch(ceiling, {0.5, 0.55, 0}, 1.0, 20, 1.0f),
+                                                 patch(wall, {0.5, 0, -0.275}, 0.45, 9, 1.0f)};
+  // Rows z = -0.475, -0.425, ..., 0.475, x = 0.025, ..., 0.975.
+  std::vector<PlanarPrimitive> completed = {patch(wall, {0.5, 0, 0}, 1.0, 20, 0.9f)};
+  ObservedFusionOptions options = fusionOnly();
+  options.contradiction_radius = 0.03;
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(fused.size(), 2u);  // the wall, and the ceiling added as seen
+  const PlanarPrimitive& fused_wall = fused[0];
+  ASSERT_LT(maxDistanceToPlane(fused_wall, wall), 1e-6);
+  const auto within_reach_above = [](const Eigen::Vector3d& p) { return p.z() > 0.0 && p.z() < 0.26; };
+  const auto beyond_reach = [](const Eigen::Vector3d& p) { return p.z() > 0.3; };
+  const auto in_the_pocket = [](const Eigen::Vector3d& p) { return p.z() < 0.0; };
+  EXPECT_EQ(countPoints(completed[0], within_reach_above), 100u);
+  EXPECT_EQ(countPoints(fused_wall, within_reach_above), 0u);
+  EXPECT_EQ(countPoints(fused_wall, beyond_reach), countPoints(completed[0], beyond_reach));
+  EXPECT_EQ(countPoints(fused_wall, in_the_pocket), 81u + countPoints(completed[0], in_the_pocket));
+  EXPECT_GE(report.contradicted_points, 100u);
+
+  // Seen with the wall's normal the other way (air at y < 0), the ceiling no longer hangs over the
+  // spot in front: every point stays.
+  const Plane wall_facing_back = wall.flipped();
+  const std::vector<PlanarPrimitive> observed_back = {observed[0], patch(wall_facing_back, {0.5, 0, -0.275}, 0.45, 9, 1.0f)};
+  EXPECT_EQ(fuseWithObserved(completed, observed_back, options)[0].points.size(), 81u + 400u);
+
+  // Off with the radius, as every check of the seen faces' predicted points.
+  options.contradiction_radius = 0.0;
+  EXPECT_EQ(fuseWithObserved(completed, observed, options)[0].points.size(), 81u + 400u);
 }
 
 // Seen from above: a roof z = 1 (10 x 10 points, x and y in 0.05..0.95, spacing 0.1). Predicted:

@@ -253,7 +253,7 @@ class SightLines {
 
   /// One direction per frame: its columns are the direction and two unit vectors across it.
   SightLines(const std::vector<PlanarPrimitive>& observed, std::size_t min_points,
-             const std::vector<Eigen::Matrix3d>& frames, double radius)
+             const std::vector<Eigen::Matrix3d>& frames, double radius, double min_facing = kMinFacing)
       : radius_(radius) {
     directions_.reserve(frames.size());
     for (const Eigen::Matrix3d& frame : frames) {
@@ -262,7 +262,7 @@ class SightLines {
       for (const auto& segment : observed) {
         if (!isTrusted(segment, min_points)) continue;
         const double facing = segment.plane.normal.normalized().dot(direction.along);
-        if (std::abs(facing) < kMinFacing) continue;
+        if (std::abs(facing) < min_facing) continue;
         for (const auto& p : segment.points) {
           const Eigen::Vector3d x = position(p);
           direction.met.insert(x.dot(direction.across), x.dot(direction.up), Met{x.dot(direction.along), facing > 0.0});
@@ -273,6 +273,7 @@ class SightLines {
   }
 
   std::size_t size() const { return directions_.size(); }
+  const Eigen::Vector3d& along(std::size_t k) const { return directions_[k].along; }
 
   FirstMet firstMet(const Eigen::Vector3d& q, std::size_t k, double gap = 0.0) const {
     FirstMet first;
@@ -719,13 +720,23 @@ void capProfileEnds(const SeenBox& seen, const std::vector<PlanarPrimitive>& obs
 // plane (the segmenter's inlier distance is 0.004 by default), so they never do.
 constexpr double kContradictionGap = 0.01;
 
+// The check for solid in front of a seen face's point (dropContradicted), chosen on the tuning
+// parts: the spot's distance in front and the reach, in contradiction radii; how square a surface
+// must be to the line to count; how close to the face's plane a box axis must lie.
+constexpr double kFrontOffset = 1.5;
+constexpr double kFrontReach = 6.0;
+constexpr double kSquareFacing = 0.906;  // cos 25 degrees
+constexpr double kInPlaneAxisDegrees = 10.0;
+
 // Drops the network's points of a seen face that the scan contradicts (ObservedFusionOptions::
-// contradiction_radius); returns how many went. `own` are the face's seen points, `to_scan` each
-// predicted point's distance to the nearest observed point, `observed` the segments.
+// contradiction_radius); returns how many went. `own` are the face's seen points, `outward` its
+// normal as the scan saw it, `to_scan` each predicted point's distance to the nearest observed
+// point, `observed` the segments, `axes` the seen box's.
 std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const Plane& plane,
-                             const pcl::PointCloud<pcl::PointNormal>& own, const double* to_scan,
-                             const std::vector<PlanarPrimitive>& observed, std::size_t min_points, double radius,
-                             double gap) {
+                             const Eigen::Vector3d& outward, const pcl::PointCloud<pcl::PointNormal>& own,
+                             const double* to_scan, const std::vector<PlanarPrimitive>& observed,
+                             std::size_t min_points, double radius, double gap,
+                             const std::optional<Eigen::Matrix3d>& axes) {
   if (predicted.empty() || !(radius > 0.0)) return 0;
   std::vector<Eigen::Vector3d> queries;
   queries.reserve(predicted.size());
@@ -743,10 +754,40 @@ std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const
     const SightLines::FirstMet first = lines.firstMet(q, 0, gap);
     return first.ahead && first.ahead->faces_along && first.behind && !first.behind->faces_along;
   };
+
+  // Just in front of the point, where a face has air, looking along each box axis that lies in
+  // the face's plane: a seen surface met first within the reach that faces away (its normal
+  // points along the line of sight) puts that spot inside the part. The network carries a
+  // pocket's wall on past the pocket's ceiling, through the solid into the hidden side, and the
+  // assemblers carved the part out along it (doc/results.md, forty-third session). The spot lies
+  // farther in front than the radius, so that lines along the face pass clear of the faces it
+  // meets at its own edges; only surfaces within 25 degrees of square to the line count, and only
+  // within the reach: farther off, the line may have crossed an unseen surface first.
+  std::vector<Eigen::Matrix3d> along_frames;
+  if (axes)
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(n.dot(axes->col(k))) < std::sin(degreesToRadians(kInPlaneAxisDegrees))) {
+        Eigen::Matrix3d along;
+        along << axes->col(k), axes->col((k + 1) % 3), axes->col((k + 2) % 3);
+        along_frames.push_back(along);
+      }
+  const SightLines along_face(observed, min_points, along_frames, radius, kSquareFacing);
+  const Eigen::Vector3d in_front = kFrontOffset * radius * (n.dot(outward) < 0.0 ? -n : n);
+  const double reach = kFrontReach * radius;
+  const auto solid_in_front = [&](const Eigen::Vector3d& q) {
+    const Eigen::Vector3d spot = q + in_front;
+    for (std::size_t k = 0; k < along_face.size(); ++k) {
+      const SightLines::FirstMet first = along_face.firstMet(spot, k);
+      const double t = along_face.along(k).dot(spot);
+      if (first.ahead && first.ahead->faces_along && first.ahead->t - t < reach) return true;
+      if (first.behind && !first.behind->faces_along && t - first.behind->t < reach) return true;
+    }
+    return false;
+  };
   return keepWhere(predicted, [&](std::size_t i) {
     // The scan saw this spot, and not this face there.
     const bool seen_without_the_face = to_scan[i] < radius && to_own[i] >= radius;
-    return !seen_without_the_face && !inside(queries[i]);
+    return !seen_without_the_face && !inside(queries[i]) && !solid_in_front(queries[i]);
   });
 }
 
@@ -896,6 +937,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       ++counts.absorbed;
     }
   }
+  const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points, options.scanner_direction);
   if (options.contradiction_radius > 0.0) {
     // One search of the whole scan for the network's points of every seen face (one kd-tree).
     std::vector<const pcl::PointCloud<pcl::PointNormal>*> scan;
@@ -910,9 +952,10 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       if (!snapped[c]) continue;
       const std::size_t count = predicted_points[c].size();
       counts.contradicted_points +=
-          dropContradicted(predicted_points[c], completed[c].plane, completed[c].points, to_scan.data() + first,
+          dropContradicted(predicted_points[c], completed[c].plane, seen_plane[c].normal, completed[c].points,
+                           to_scan.data() + first,
                            observed, options.min_observed_points, options.contradiction_radius * diagonal,
-                           kContradictionGap * diagonal);
+                           kContradictionGap * diagonal, seen_normals.axes);
       first += count;
     }
   }
@@ -936,7 +979,6 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
     shown_of[c] = shown.size();
     shown.push_back(std::move(network_part));
   }
-  const SeenNormals seen_normals = seenNormals(observed, options.min_observed_points, options.scanner_direction);
   if (options.align_unseen_degrees > 0.0) {
     const auto directions = seenDirections(seen_normals);
     const double max_align = degreesToRadians(options.align_unseen_degrees);

@@ -93,7 +93,11 @@ struct ObservedFusionOptions {
   ///  - an observed point lies within this distance but none of the face's own seen points does:
   ///    the scan saw that spot, and not this face there; or
   ///  - looking along the face's normal both ways, the first seen surface met within this
-  ///    distance of the line on each side faces away from it: it lies inside the seen solid.
+  ///    distance of the line on each side faces away from it: it lies inside the seen solid; or
+  ///  - the spot 1.5 times this distance in front of it (on the side the scan saw the face from)
+  ///    is in the seen solid: looking from there along a seen box axis that lies in the face's
+  ///    plane, the first seen surface square to the line (within 25 degrees), within 6 times this
+  ///    distance, faces away. A pocket's wall carried on past its seen ceiling goes.
   /// Points the scan says nothing about stay.
   double contradiction_radius = 0.03;
   /// Unseen completed primitives keep this fraction of their points, evenly spaced (in (0, 1];
