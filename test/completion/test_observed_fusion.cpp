@@ -740,7 +740,8 @@ TEST(ObservedFusion, ASeenWallsPredictedPointsPastASeenCeilingAreDropped) {
   // Seen with the wall's normal the other way (air at y < 0), the ceiling no longer hangs over the
   // spot in front: every point stays.
   const Plane wall_facing_back = wall.flipped();
-  const std::vector<PlanarPrimitive> observed_back = {observed[0], patch(wall_facing_back, {0.5, 0, -0.275}, 0.45, 9, 1.0f)};
+  const std::vector<PlanarPrimitive> observed_back = {observed[0],
+                                                      patch(wall_facing_back, {0.5, 0, -0.275}, 0.45, 9, 1.0f)};
   EXPECT_EQ(fuseWithObserved(completed, observed_back, options)[0].points.size(), 81u + 400u);
 
   // Off with the radius, as every check of the seen faces' predicted points.
