@@ -298,6 +298,13 @@ class SightLines {
   std::vector<Direction> directions_;
 };
 
+// One frame per box axis, for SightLines: the axis, then the other two.
+std::vector<Eigen::Matrix3d> boxAxisFrames(const Eigen::Matrix3d& axes) {
+  std::vector<Eigen::Matrix3d> frames(3);
+  for (int k = 0; k < 3; ++k) frames[k] << axes.col(k), axes.col((k + 1) % 3), axes.col((k + 2) % 3);
+  return frames;
+}
+
 // Space the seen faces show to be empty: a point is in front of a seen surface when, looking from
 // it along one of the box axes, the first point met belongs to a seen face whose normal faces
 // back at it. A box-face point there lies over a seen step, notch or chamfer, or in a gap the
@@ -323,11 +330,6 @@ class SeenFreeSpace {
   }
 
  private:
-  static std::vector<Eigen::Matrix3d> boxAxisFrames(const Eigen::Matrix3d& axes) {
-    std::vector<Eigen::Matrix3d> frames(3);
-    for (int k = 0; k < 3; ++k) frames[k] << axes.col(k), axes.col((k + 1) % 3), axes.col((k + 2) % 3);
-    return frames;
-  }
   SightLines lines_;
 };
 
@@ -722,7 +724,8 @@ constexpr double kContradictionGap = 0.01;
 
 // The check for solid in front of a seen face's point (dropContradicted), chosen on the tuning
 // parts: the spot's distance in front and the reach, in contradiction radii; how square a surface
-// must be to the line to count; how close to the face's plane a box axis must lie.
+// must be to the line to count (the sight lines along the box axes are built with it); how close
+// to the face's plane a box axis must lie.
 constexpr double kFrontOffset = 1.5;
 constexpr double kFrontReach = 6.0;
 constexpr double kSquareFacing = 0.906;  // cos 25 degrees
@@ -731,12 +734,12 @@ constexpr double kInPlaneAxisDegrees = 10.0;
 // Drops the network's points of a seen face that the scan contradicts (ObservedFusionOptions::
 // contradiction_radius); returns how many went. `own` are the face's seen points, `outward` its
 // normal as the scan saw it, `to_scan` each predicted point's distance to the nearest observed
-// point, `observed` the segments, `axes` the seen box's.
+// point, `observed` the segments, `along_axes` what they show along the seen box's axes (one
+// direction per axis, surfaces within kSquareFacing; none without axes).
 std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const Plane& plane,
                              const Eigen::Vector3d& outward, const pcl::PointCloud<pcl::PointNormal>& own,
                              const double* to_scan, const std::vector<PlanarPrimitive>& observed,
-                             std::size_t min_points, double radius, double gap,
-                             const std::optional<Eigen::Matrix3d>& axes) {
+                             std::size_t min_points, double radius, double gap, const SightLines& along_axes) {
   if (predicted.empty() || !(radius > 0.0)) return 0;
   std::vector<Eigen::Vector3d> queries;
   queries.reserve(predicted.size());
@@ -763,22 +766,16 @@ std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const
   // farther in front than the radius, so that lines along the face pass clear of the faces it
   // meets at its own edges; only surfaces within 25 degrees of square to the line count, and only
   // within the reach: farther off, the line may have crossed an unseen surface first.
-  std::vector<Eigen::Matrix3d> along_frames;
-  if (axes)
-    for (int k = 0; k < 3; ++k)
-      if (std::abs(n.dot(axes->col(k))) < std::sin(degreesToRadians(kInPlaneAxisDegrees))) {
-        Eigen::Matrix3d along;
-        along << axes->col(k), axes->col((k + 1) % 3), axes->col((k + 2) % 3);
-        along_frames.push_back(along);
-      }
-  const SightLines along_face(observed, min_points, along_frames, radius, kSquareFacing);
+  std::vector<std::size_t> in_plane;  // the box axes that lie in the face's plane
+  for (std::size_t k = 0; k < along_axes.size(); ++k)
+    if (std::abs(n.dot(along_axes.along(k))) < std::sin(degreesToRadians(kInPlaneAxisDegrees))) in_plane.push_back(k);
   const Eigen::Vector3d in_front = kFrontOffset * radius * (n.dot(outward) < 0.0 ? -n : n);
   const double reach = kFrontReach * radius;
   const auto solid_in_front = [&](const Eigen::Vector3d& q) {
     const Eigen::Vector3d spot = q + in_front;
-    for (std::size_t k = 0; k < along_face.size(); ++k) {
-      const SightLines::FirstMet first = along_face.firstMet(spot, k);
-      const double t = along_face.along(k).dot(spot);
+    for (std::size_t k : in_plane) {
+      const SightLines::FirstMet first = along_axes.firstMet(spot, k);
+      const double t = along_axes.along(k).dot(spot);
       if (first.ahead && first.ahead->faces_along && first.ahead->t - t < reach) return true;
       if (first.behind && !first.behind->faces_along && t - first.behind->t < reach) return true;
     }
@@ -947,6 +944,9 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
       if (snapped[c])
         for (const auto& p : predicted_points[c]) queries.push_back(position(p));
     const std::vector<double> to_scan = nearestDistances(queries, scan);
+    const SightLines along_axes(observed, options.min_observed_points,
+                                seen_normals.axes ? boxAxisFrames(*seen_normals.axes) : std::vector<Eigen::Matrix3d>{},
+                                options.contradiction_radius * diagonal, kSquareFacing);
     std::size_t first = 0;
     for (std::size_t c = 0; c < completed.size(); ++c) {
       if (!snapped[c]) continue;
@@ -955,7 +955,7 @@ std::vector<PlanarPrimitive> fuseWithObserved(std::vector<PlanarPrimitive> compl
           dropContradicted(predicted_points[c], completed[c].plane, seen_plane[c].normal, completed[c].points,
                            to_scan.data() + first,
                            observed, options.min_observed_points, options.contradiction_radius * diagonal,
-                           kContradictionGap * diagonal, seen_normals.axes);
+                           kContradictionGap * diagonal, along_axes);
       first += count;
     }
   }
