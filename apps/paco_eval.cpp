@@ -359,7 +359,8 @@ int run(int argc, char** argv) {
         " of the input's points, at least 3)").c_str())
       ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
        ("segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: " +
-        paco::percentText(paco::kScanMinParallelPlaneFraction) + " of the input's points; -1: none)").c_str())
+        paco::percentText(paco::kScanMinParallelPlaneFraction) + " of the input's points, " +
+        paco::percentText(paco::kNoisyScanMinParallelPlaneFraction) + " on a noisy scan; -1: none)").c_str())
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")

@@ -162,13 +162,13 @@ int run(int argc, char** argv) {
   segmenter->setInputCloud(cloud);
   segmenter->segment(segmentation);
   timer.stop();
-  const int parallel_points = segmenter->getMinPointsPerParallelPlane();
+  const int parallel_points = segmenter->getUsedMinPointsPerParallelPlane();
   const std::string parallel =
       parallel_points > 0 ? ", parallel to a larger one >= " + std::to_string(parallel_points) : std::string();
   const std::string noisy =
       paco::app::noisyScanNote(segmenter->getDistanceThreshold(), segmenter->getUsedDistanceThreshold());
   std::printf("segment (%s, planes of >= %d points%s%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
-              segmenter->getMinPointsPerPlane(), parallel.c_str(), noisy.c_str(), segmentation.size(),
+              segmenter->getUsedMinPointsPerPlane(), parallel.c_str(), noisy.c_str(), segmentation.size(),
               100.0 * segmentation.coverage());
   if (segmentation.empty())
     throw paco::InvalidInputError("'" + o.input + "': no planar segment found; is it a piecewise-planar object?");

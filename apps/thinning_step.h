@@ -38,7 +38,8 @@ inline void addMinParallelPointsOption(boost::program_options::options_descripti
   options.add_options()(
       "min-parallel-points", boost::program_options::value(&min_points)->default_value(min_points),
       ("segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: " +
-       percentText(kScanMinParallelPlaneFraction) + " of the working cloud's points; -1: none)")
+       percentText(kScanMinParallelPlaneFraction) + " of the working cloud's points, " +
+       percentText(kNoisyScanMinParallelPlaneFraction) + " on a noisy scan; -1: none)")
           .c_str());
 }
 

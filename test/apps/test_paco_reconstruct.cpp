@@ -70,10 +70,11 @@ TEST(PacoReconstruct, DirectBaselineGivesClosedMeshInTheInputFrame) {
   ASSERT_EQ(rc, 0) << log;
   // By default the smallest plane is a share of the points (the sample has no repeated points),
   // and a smaller share for planes parallel to a larger one; the sample's noise (0.5 % of the
-  // diagonal) widens the inlier distance.
+  // diagonal) widens the inlier distance, and with it the parallel planes' share.
   const paco::io::LabelledCloud cloud = paco::io::loadCloud(input);
   const std::string min_points = std::to_string(paco::scanMinPointsPerPlane(cloud.points.size()));
-  const std::string min_parallel_points = std::to_string(paco::scanMinPointsPerParallelPlane(cloud.points.size(), 0));
+  const std::string min_parallel_points =
+      std::to_string(paco::noisyScanMinPointsPerParallelPlane(cloud.points.size(), 0));
   EXPECT_NE(log.find("segment (gocopp, planes of >= " + min_points + " points, parallel to a larger one >= " +
                      min_parallel_points + ", inlier distance raised to"),
             std::string::npos)
@@ -765,7 +766,7 @@ TEST(PacoReconstruct, BadOptionsAreUsageErrors) {
   EXPECT_NE(log.find("--min-points must be 0 (1 % of the points) or at least 3, got 2"), std::string::npos) << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --min-parallel-points 2", &log), 2)
       << log;
-  EXPECT_NE(log.find("--min-parallel-points must be -1 (none), 0 (0.5 % of the points) or at least 3, got 2"),
+  EXPECT_NE(log.find("--min-parallel-points must be -1 (none), 0 (0.15 % of the points) or at least 3, got 2"),
             std::string::npos)
       << log;
   EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o x.obj --noise-adaptation -1", &log), 2)

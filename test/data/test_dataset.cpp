@@ -174,7 +174,7 @@ TEST(DatasetInfo, SegmentMinimumsAreRecordedAndOldInfoFilesMeanFiftyWithoutParal
   EXPECT_EQ(old.segment_min_parallel_points, -1);  // and without small parallel planes
   info.segment_min_parallel_points = 0;
   EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_parallel_points, 0);
-  EXPECT_NE(info.describe().find("parallel to a larger one of at least 0.5 %"), std::string::npos);
+  EXPECT_NE(info.describe().find("parallel to a larger one of at least the tools' share of the input's points (0.15 %"), std::string::npos);
   info.segment_min_parallel_points = 12;
   EXPECT_EQ(DatasetInfo::parse(info.serialize(), "here").segment_min_parallel_points, 12);
   // Without parallel planes the info file is the one written before the key existed, so such

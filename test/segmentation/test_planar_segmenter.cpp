@@ -245,7 +245,8 @@ TEST(PlanarSegmenter, TheToolsDefaultKeepsTheWallsOfASmallHole) {
 }
 
 TEST(PlanarSegmenter, ScanParallelMinimumIsAShareUnlessACountOrOffIsAsked) {
-  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 0), 10);  // 10.24, rounded
+  EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 0), 3);  // 3.07, rounded
+  EXPECT_EQ(scanMinPointsPerParallelPlane(20000, 0), 30);
   EXPECT_EQ(scanMinPointsPerParallelPlane(100, 0), 3);
   EXPECT_EQ(scanMinPointsPerParallelPlane(2048, 15), 15);
   EXPECT_EQ(scanMinPointsPerParallelPlane(2048, -1), 0);  // off
@@ -625,6 +626,57 @@ TEST(NoiseAdaptation, ANoisyBoxGetsOnePlanePerFace) {
     for (const auto& plane : result.planes) matched |= plane.normal.dot(box.plane_normals[f]) > std::cos(paco::degreesToRadians(2.0));
     EXPECT_TRUE(matched) << "face " << f << " normal " << box.plane_normals[f].transpose();
   }
+}
+
+// On a noisy scan the tools ask for larger parallel planes (kNoisyScanMinParallelPlaneFraction):
+// the noise scattered off each face would otherwise make planes of a few points.
+TEST(NoiseAdaptation, RaisesTheParallelPlaneMinimumOnANoisyScanOnly) {
+  const LabelledSample noisy = noisyBox(0.01);
+  const std::size_t n = noisy.cloud->size();
+  auto seg = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  setScanDefaults(*seg, n, 0, 0);
+  EXPECT_EQ(seg->getNoisyScanMinPointsPerParallelPlane(), noisyScanMinPointsPerParallelPlane(n, 0));
+  seg->setInputCloud(noisy.cloud);
+  PlanarSegmentation result;
+  seg->segment(result);
+  EXPECT_EQ(seg->getUsedMinPointsPerPlane(), scanMinPointsPerPlane(n));
+  EXPECT_EQ(seg->getUsedMinPointsPerParallelPlane(), noisyScanMinPointsPerParallelPlane(n, 0));
+  EXPECT_GT(seg->getUsedMinPointsPerParallelPlane(), scanMinPointsPerParallelPlane(n, 0));
+  EXPECT_EQ(result.size(), 6u);
+  for (const auto& segment : result.segments)
+    EXPECT_GE(segment.indices.size(), static_cast<std::size_t>(seg->getUsedMinPointsPerParallelPlane()));
+
+  // The clean-scan minimums on the same noisy scan: pieces of the noise become planes.
+  auto clean_rule = makePlanarSegmenter<pcl::PointNormal>("gocopp");
+  setScanDefaults(*clean_rule, n, 0, 0);
+  clean_rule->setNoisyScanMinimums(0, 0);
+  clean_rule->setInputCloud(noisy.cloud);
+  PlanarSegmentation pieces;
+  clean_rule->segment(pieces);
+  EXPECT_EQ(clean_rule->getUsedMinPointsPerParallelPlane(), scanMinPointsPerParallelPlane(n, 0));
+  EXPECT_GT(pieces.size(), 6u);
+
+  // A clean scan keeps the clean-scan minimums; a requested count holds on every scan.
+  const LabelledSample clean = cleanBox();
+  seg->setInputCloud(clean.cloud);
+  setScanDefaults(*seg, clean.cloud->size(), 0, 0);
+  seg->segment(result);
+  EXPECT_EQ(seg->getUsedMinPointsPerPlane(), scanMinPointsPerPlane(clean.cloud->size()));
+  EXPECT_EQ(seg->getUsedMinPointsPerParallelPlane(), scanMinPointsPerParallelPlane(clean.cloud->size(), 0));
+  setScanDefaults(*seg, n, 40, 12);
+  seg->setInputCloud(noisy.cloud);
+  seg->segment(result);
+  EXPECT_EQ(seg->getUsedMinPointsPerPlane(), 40);
+  EXPECT_EQ(seg->getUsedMinPointsPerParallelPlane(), 12);
+  EXPECT_THROW(seg->setNoisyScanMinimums(2, 0), InvalidInputError);
+  EXPECT_THROW(seg->setNoisyScanMinimums(0, -1), InvalidInputError);
+}
+
+TEST(PlanarSegmenter, NoisyScanParallelMinimumIsTheEarlierShareUnlessACountOrOffIsAsked) {
+  EXPECT_EQ(noisyScanMinPointsPerParallelPlane(2048, 0), 10);  // 10.24, rounded
+  EXPECT_EQ(noisyScanMinPointsPerParallelPlane(100, 0), 3);
+  EXPECT_EQ(noisyScanMinPointsPerParallelPlane(2048, 15), 15);
+  EXPECT_EQ(noisyScanMinPointsPerParallelPlane(2048, -1), 0);  // off
 }
 
 TEST(NoiseAdaptation, LeavesACleanScanAndTheDefaultAlone) {

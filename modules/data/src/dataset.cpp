@@ -4,7 +4,6 @@
 
 #include <paco/common/error.h>
 #include <paco/common/hash.h>
-#include <paco/common/scan_shares.h>
 #include <paco/io/mesh_io.h>
 
 #include <algorithm>
@@ -197,8 +196,8 @@ std::string DatasetInfo::describe() const {
     if (segment_min_parallel_points >= 0)
       out << ", planes parallel to a larger one of at least "
           << (segment_min_parallel_points > 0 ? std::to_string(segment_min_parallel_points) + " points"
-                                              : percentText(kScanMinParallelPlaneFraction) +
-                                                    " of the input's points (the tools' default)");
+                                              : "the tools' share of the input's points (0.15 % since 2026-12-06, "
+                                                "0.5 % before and on a noisy input)");
   }
   out << "\npoints: " << input_points << " per input, " << gt_points << " ground truth, cut from " << dense_points
       << " dense\nseed: " << seed << "\nsource: " << source << "\n";

@@ -15,13 +15,22 @@ namespace paco {
 /// leave out many of a part's pockets and steps. 1 % (20 points) finds the walls of small holes
 /// and pockets that 1.5 % (31) left out: on 300 validation parts PolyFit's CD fell by 0.064 and
 /// HD by 0.37, with no failure (thirty-fourth session; 1.5 % before, when 1 % still made PolyFit
-/// fail and the real roof scans worse). A share, unlike a count, also keeps the noise planes of dense
-/// real scans out (doc/results.md, "Smaller planes").
+/// fail and the real roof scans worse). 0.4 % gained more on MFCAD (forty-fourth session), but
+/// gave the cell complex two components on three of the six real-scan runs. A share, unlike a
+/// count, also keeps the noise planes of dense real scans out (doc/results.md, "Smaller planes").
 constexpr double kScanMinPlaneFraction = 0.01;
 
 /// The share of a scan's points a plane parallel to a larger one needs in the tools
-/// (PlanarSegmenter::setMinPointsPerParallelPlane): 0.5 %, 10 of a 2,048-point input.
-constexpr double kScanMinParallelPlaneFraction = 0.005;
+/// (PlanarSegmenter::setMinPointsPerParallelPlane): 0.15 %, 3 of a 2,048-point input, the fewest
+/// any plane may have. Such a plane is nearly always a pocket's floor or a step's face seen by a
+/// handful of points; 0.5 % (10 points, before the forty-fourth session) left most of them out.
+constexpr double kScanMinParallelPlaneFraction = 0.0015;
+
+/// The share a parallel plane needs on a noisy scan, one whose noise widens the segmenter's inlier
+/// distance (PlanarSegmenter::setNoiseAdaptation): 0.5 %, the rule before the forty-fourth
+/// session. Noise scatters a face's points off its plane, and planes of a handful of points are
+/// then pieces of that scatter (doc/results.md, forty-fourth session).
+constexpr double kNoisyScanMinParallelPlaneFraction = 0.005;
 
 /// A share of points as the tools' help texts and messages print it: 0.01 -> "1 %". Texts print
 /// the constants above with it, so that a new rule needs no edit of them.

@@ -102,8 +102,8 @@ struct DatasetInfo {
   int segment_min_points = 50;
   /// With input_labels_from_segmenter: the smallest plane parallel to a larger one, in points
   /// (PlanarSegmenter::setMinPointsPerParallelPlane); 0 means paco::scanMinPointsPerParallelPlane
-  /// of each input (0.5 %, the tools' default), negative means none. Datasets written before
-  /// this key existed had none.
+  /// of each input (the tools' default: 0.15 % since 2026-12-06, 0.5 % before and on a noisy
+  /// input), negative means none. Datasets written before this key existed had none.
   int segment_min_parallel_points = -1;
   std::string source;                 ///< mesh folder or "procedural"
 

@@ -70,8 +70,8 @@ struct MethodOptions {
   /// for paco::scanMinPointsPerPlane of the input's points, as paco_reconstruct, else >= 3.
   int segment_min_points = 0;
   /// Smaller planes parallel to a kept one (PlanarSegmenter::setMinPointsPerParallelPlane), as
-  /// paco::scanMinPointsPerParallelPlane reads it: 0 (default, as the tools) for 0.5 % of the
-  /// input's points; > 0 (>= 3) a count; -1 none.
+  /// paco::scanMinPointsPerParallelPlane reads it: 0 (default, as the tools) for
+  /// paco::kScanMinParallelPlaneFraction of the input's points; > 0 (>= 3) a count; -1 none.
   int segment_min_parallel_points = 0;
   /// Noise adaptation of the segmenter (PlanarSegmenter::setNoiseAdaptation): on a noisy input ε
   /// widens to this many times the estimated noise; default paco::kScanNoiseMultiple, as the

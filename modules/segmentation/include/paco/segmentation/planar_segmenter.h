@@ -49,6 +49,15 @@ inline int scanMinPointsPerParallelPlane(std::size_t points, int requested) {
   return detail::shareOfPoints(points, kScanMinParallelPlaneFraction);
 }
 
+/// The noisy-scan counterpart of the one above (PlanarSegmenter::setNoisyScanMinimums): a
+/// requested count (> 0) holds on every scan; 0 (off) when negative; otherwise
+/// kNoisyScanMinParallelPlaneFraction of the points, rounded and at least 3.
+inline int noisyScanMinPointsPerParallelPlane(std::size_t points, int requested) {
+  if (requested > 0) return requested;
+  if (requested != 0) return 0;
+  return detail::shareOfPoints(points, kNoisyScanMinParallelPlaneFraction);
+}
+
 /// The noise level PlanarSegmenter::setNoiseAdaptation reads: PreparedCloud::noiseLevel with
 /// these neighbours and this quantile (on clean MFCAD scans 0; with noise of 1 % of the
 /// diagonal about 0.8 % of it).
@@ -128,6 +137,21 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   void setMinPointsPerParallelPlane(int min_points);
   int getMinPointsPerParallelPlane() const { return min_parallel_points_; }
 
+  /// The fewest points of a plane, and of a plane parallel to a larger one, on a noisy scan: when
+  /// noise adaptation widens ε, segment() uses these where they exceed getMinPointsPerPlane() and
+  /// getMinPointsPerParallelPlane() (parallel planes stay off when those are off). Noise scatters a
+  /// face's points off its plane, and a plane of a handful of them is a piece of the scatter. Each 0
+  /// (default, no change) or >= 3; the tools keep their plane minimum and ask
+  /// kNoisyScanMinParallelPlaneFraction of the points for parallel planes.
+  void setNoisyScanMinimums(int min_points, int min_parallel_points);
+  int getNoisyScanMinPointsPerPlane() const { return noisy_min_points_; }
+  int getNoisyScanMinPointsPerParallelPlane() const { return noisy_min_parallel_points_; }
+
+  /// The fewest points of a plane and of a parallel plane (0: none) the last segment() used: the
+  /// settings above, or the noisy-scan minimums on a noisy scan.
+  int getUsedMinPointsPerPlane() const { return used_min_points_; }
+  int getUsedMinPointsPerParallelPlane() const { return used_min_parallel_points_; }
+
   /// k, the neighbours used to estimate normals and to grow regions. Range >= 3; default 20.
   void setNumberOfNeighbours(int k);
   int getNumberOfNeighbours() const { return neighbours_; }
@@ -171,6 +195,12 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   double normal_threshold_ = 0.85;
   int min_points_ = 50;
   int min_parallel_points_ = 0;
+  int noisy_min_points_ = 0;
+  int noisy_min_parallel_points_ = 0;
+  /// The minimums of the current segment() call, what the backends use (min_points_ and
+  /// min_parallel_points_, or on a noisy scan the noisy-scan minimums where larger).
+  int used_min_points_ = 50;
+  int used_min_parallel_points_ = 0;
   int neighbours_ = 20;
   unsigned int threads_ = 0;
   std::optional<Eigen::Vector3d> viewpoint_;
@@ -192,6 +222,8 @@ template <typename PointT>
 void setScanMinimums(PlanarSegmenter<PointT>& segmenter, std::size_t points, int min_points, int min_parallel_points) {
   segmenter.setMinPointsPerPlane(scanMinPointsPerPlane(points, min_points));
   segmenter.setMinPointsPerParallelPlane(scanMinPointsPerParallelPlane(points, min_parallel_points));
+  segmenter.setNoisyScanMinimums(scanMinPointsPerPlane(points, min_points),
+                                 noisyScanMinPointsPerParallelPlane(points, min_parallel_points));
 }
 
 /// The tools' segmentation settings for a cloud of `points` points: setScanMinimums and noise
