@@ -168,7 +168,7 @@ int run(int argc, char** argv) {
   const std::string noisy =
       paco::app::noisyScanNote(segmenter->getDistanceThreshold(), segmenter->getUsedDistanceThreshold());
   std::printf("segment (%s, planes of >= %d points%s%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
-              segmenter->getUsedMinPointsPerPlane(), parallel.c_str(), noisy.c_str(), segmentation.size(),
+              segmenter->getMinPointsPerPlane(), parallel.c_str(), noisy.c_str(), segmentation.size(),
               100.0 * segmentation.coverage());
   if (segmentation.empty())
     throw paco::InvalidInputError("'" + o.input + "': no planar segment found; is it a piecewise-planar object?");

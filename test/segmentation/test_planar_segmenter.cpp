@@ -639,7 +639,7 @@ TEST(NoiseAdaptation, RaisesTheParallelPlaneMinimumOnANoisyScanOnly) {
   seg->setInputCloud(noisy.cloud);
   PlanarSegmentation result;
   seg->segment(result);
-  EXPECT_EQ(seg->getUsedMinPointsPerPlane(), scanMinPointsPerPlane(n));
+  EXPECT_EQ(seg->getMinPointsPerPlane(), scanMinPointsPerPlane(n));
   EXPECT_EQ(seg->getUsedMinPointsPerParallelPlane(), noisyScanMinPointsPerParallelPlane(n, 0));
   EXPECT_GT(seg->getUsedMinPointsPerParallelPlane(), scanMinPointsPerParallelPlane(n, 0));
   EXPECT_EQ(result.size(), 6u);
@@ -649,7 +649,7 @@ TEST(NoiseAdaptation, RaisesTheParallelPlaneMinimumOnANoisyScanOnly) {
   // The clean-scan minimums on the same noisy scan: pieces of the noise become planes.
   auto clean_rule = makePlanarSegmenter<pcl::PointNormal>("gocopp");
   setScanDefaults(*clean_rule, n, 0, 0);
-  clean_rule->setNoisyScanMinimums(0, 0);
+  clean_rule->setNoisyScanMinPointsPerParallelPlane(0);
   clean_rule->setInputCloud(noisy.cloud);
   PlanarSegmentation pieces;
   clean_rule->segment(pieces);
@@ -661,15 +661,15 @@ TEST(NoiseAdaptation, RaisesTheParallelPlaneMinimumOnANoisyScanOnly) {
   seg->setInputCloud(clean.cloud);
   setScanDefaults(*seg, clean.cloud->size(), 0, 0);
   seg->segment(result);
-  EXPECT_EQ(seg->getUsedMinPointsPerPlane(), scanMinPointsPerPlane(clean.cloud->size()));
+  EXPECT_EQ(seg->getMinPointsPerPlane(), scanMinPointsPerPlane(clean.cloud->size()));
   EXPECT_EQ(seg->getUsedMinPointsPerParallelPlane(), scanMinPointsPerParallelPlane(clean.cloud->size(), 0));
   setScanDefaults(*seg, n, 40, 12);
   seg->setInputCloud(noisy.cloud);
   seg->segment(result);
-  EXPECT_EQ(seg->getUsedMinPointsPerPlane(), 40);
+  EXPECT_EQ(seg->getMinPointsPerPlane(), 40);
   EXPECT_EQ(seg->getUsedMinPointsPerParallelPlane(), 12);
-  EXPECT_THROW(seg->setNoisyScanMinimums(2, 0), InvalidInputError);
-  EXPECT_THROW(seg->setNoisyScanMinimums(0, -1), InvalidInputError);
+  EXPECT_THROW(seg->setNoisyScanMinPointsPerParallelPlane(2), InvalidInputError);
+  EXPECT_THROW(seg->setNoisyScanMinPointsPerParallelPlane(-1), InvalidInputError);
 }
 
 TEST(PlanarSegmenter, NoisyScanParallelMinimumIsTheEarlierShareUnlessACountOrOffIsAsked) {

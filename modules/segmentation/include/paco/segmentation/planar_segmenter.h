@@ -28,6 +28,14 @@ inline int shareOfPoints(std::size_t points, double fraction) {
   const double share = fraction * static_cast<double>(points) + 0.5;
   return share < 3.0 ? 3 : static_cast<int>(share);
 }
+
+/// A parallel-plane minimum as the tools read --min-parallel-points: `requested` when > 0; 0
+/// (off) when negative; `fraction` of `points` (shareOfPoints) when 0.
+inline int parallelPlaneMinimum(std::size_t points, int requested, double fraction) {
+  if (requested > 0) return requested;
+  if (requested != 0) return 0;
+  return shareOfPoints(points, fraction);
+}
 }  // namespace detail
 
 /// kScanMinPlaneFraction of `points`, rounded, and at least 3: the tools' default
@@ -44,18 +52,15 @@ inline int scanMinPointsPerPlane(std::size_t points, int requested) {
 /// of `points` points: `requested` when > 0; 0 (off) when negative; kScanMinParallelPlaneFraction of
 /// the points, rounded and at least 3, when 0 (the tools' default).
 inline int scanMinPointsPerParallelPlane(std::size_t points, int requested) {
-  if (requested > 0) return requested;
-  if (requested != 0) return 0;
-  return detail::shareOfPoints(points, kScanMinParallelPlaneFraction);
+  return detail::parallelPlaneMinimum(points, requested, kScanMinParallelPlaneFraction);
 }
 
-/// The noisy-scan counterpart of the one above (PlanarSegmenter::setNoisyScanMinimums): a
-/// requested count (> 0) holds on every scan; 0 (off) when negative; otherwise
-/// kNoisyScanMinParallelPlaneFraction of the points, rounded and at least 3.
+/// The noisy-scan counterpart of the one above
+/// (PlanarSegmenter::setNoisyScanMinPointsPerParallelPlane): a requested count (> 0) holds on
+/// every scan; 0 (off) when negative; otherwise kNoisyScanMinParallelPlaneFraction of the points,
+/// rounded and at least 3.
 inline int noisyScanMinPointsPerParallelPlane(std::size_t points, int requested) {
-  if (requested > 0) return requested;
-  if (requested != 0) return 0;
-  return detail::shareOfPoints(points, kNoisyScanMinParallelPlaneFraction);
+  return detail::parallelPlaneMinimum(points, requested, kNoisyScanMinParallelPlaneFraction);
 }
 
 /// The noise level PlanarSegmenter::setNoiseAdaptation reads: PreparedCloud::noiseLevel with
@@ -137,19 +142,16 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   void setMinPointsPerParallelPlane(int min_points);
   int getMinPointsPerParallelPlane() const { return min_parallel_points_; }
 
-  /// The fewest points of a plane, and of a plane parallel to a larger one, on a noisy scan: when
-  /// noise adaptation widens ε, segment() uses these where they exceed getMinPointsPerPlane() and
-  /// getMinPointsPerParallelPlane() (parallel planes stay off when those are off). Noise scatters a
-  /// face's points off its plane, and a plane of a handful of them is a piece of the scatter. Each 0
-  /// (default, no change) or >= 3; the tools keep their plane minimum and ask
-  /// kNoisyScanMinParallelPlaneFraction of the points for parallel planes.
-  void setNoisyScanMinimums(int min_points, int min_parallel_points);
-  int getNoisyScanMinPointsPerPlane() const { return noisy_min_points_; }
+  /// The fewest points of a plane parallel to a larger one on a noisy scan: when noise adaptation
+  /// widens ε, segment() uses this where it exceeds getMinPointsPerParallelPlane() (parallel
+  /// planes stay off when that is off). Noise scatters a face's points off its plane, and a plane
+  /// of a handful of them is a piece of the scatter. 0 (default, no change) or >= 3; the tools ask
+  /// kNoisyScanMinParallelPlaneFraction of the points.
+  void setNoisyScanMinPointsPerParallelPlane(int min_points);
   int getNoisyScanMinPointsPerParallelPlane() const { return noisy_min_parallel_points_; }
 
-  /// The fewest points of a plane and of a parallel plane (0: none) the last segment() used: the
-  /// settings above, or the noisy-scan minimums on a noisy scan.
-  int getUsedMinPointsPerPlane() const { return used_min_points_; }
+  /// The fewest points of a parallel plane (0: none) the last segment() used:
+  /// getMinPointsPerParallelPlane(), or on a noisy scan the noisy-scan minimum where larger.
   int getUsedMinPointsPerParallelPlane() const { return used_min_parallel_points_; }
 
   /// k, the neighbours used to estimate normals and to grow regions. Range >= 3; default 20.
@@ -195,11 +197,8 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   double normal_threshold_ = 0.85;
   int min_points_ = 50;
   int min_parallel_points_ = 0;
-  int noisy_min_points_ = 0;
   int noisy_min_parallel_points_ = 0;
-  /// The minimums of the current segment() call, what the backends use (min_points_ and
-  /// min_parallel_points_, or on a noisy scan the noisy-scan minimums where larger).
-  int used_min_points_ = 50;
+  /// The parallel-plane minimum of the current segment() call.
   int used_min_parallel_points_ = 0;
   int neighbours_ = 20;
   unsigned int threads_ = 0;
@@ -222,8 +221,7 @@ template <typename PointT>
 void setScanMinimums(PlanarSegmenter<PointT>& segmenter, std::size_t points, int min_points, int min_parallel_points) {
   segmenter.setMinPointsPerPlane(scanMinPointsPerPlane(points, min_points));
   segmenter.setMinPointsPerParallelPlane(scanMinPointsPerParallelPlane(points, min_parallel_points));
-  segmenter.setNoisyScanMinimums(scanMinPointsPerPlane(points, min_points),
-                                 noisyScanMinPointsPerParallelPlane(points, min_parallel_points));
+  segmenter.setNoisyScanMinPointsPerParallelPlane(noisyScanMinPointsPerParallelPlane(points, min_parallel_points));
 }
 
 /// The tools' segmentation settings for a cloud of `points` points: setScanMinimums and noise

@@ -56,13 +56,11 @@ void PlanarSegmenter<PointT>::setMinPointsPerParallelPlane(int min_points) {
 }
 
 template <typename PointT>
-void PlanarSegmenter<PointT>::setNoisyScanMinimums(int min_points, int min_parallel_points) {
-  for (const int count : {min_points, min_parallel_points})
-    if (count != 0 && count < 3)
-      throw InvalidInputError("PlanarSegmenter::setNoisyScanMinimums: each minimum is 0 (no change) or at least 3 "
-                              "points; got " + std::to_string(count));
-  noisy_min_points_ = min_points;
-  noisy_min_parallel_points_ = min_parallel_points;
+void PlanarSegmenter<PointT>::setNoisyScanMinPointsPerParallelPlane(int min_points) {
+  if (min_points != 0 && min_points < 3)
+    throw InvalidInputError("PlanarSegmenter::setNoisyScanMinPointsPerParallelPlane: 0 (no change) or at least 3 "
+                            "points; got " + std::to_string(min_points));
+  noisy_min_parallel_points_ = min_points;
 }
 
 template <typename PointT>
@@ -139,21 +137,17 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
       used_distance_threshold_ = std::max(
           distance_threshold_, std::min(kMaxNoiseAdaptedDistance,
                                         noise_multiple_ * prepared_.noiseLevel(kNoiseNeighbours, kNoiseQuantile)));
-    // A widened ε means a noisy scan: the noisy-scan minimums apply where larger.
-    used_min_points_ = min_points_;
+    // A widened ε means a noisy scan: the noisy-scan parallel minimum applies where larger.
     used_min_parallel_points_ = min_parallel_points_;
-    if (used_distance_threshold_ > distance_threshold_) {
-      used_min_points_ = std::max(min_points_, noisy_min_points_);
-      if (min_parallel_points_ > 0)
-        used_min_parallel_points_ = std::max(min_parallel_points_, noisy_min_parallel_points_);
-    }
+    if (used_distance_threshold_ > distance_threshold_ && min_parallel_points_ > 0)
+      used_min_parallel_points_ = std::max(min_parallel_points_, noisy_min_parallel_points_);
     std::vector<int> labels(prepared_.size(), -1);
     if (!prepared_.collinear) performSegmentation(labels);
     if (labels.size() != prepared_.size())
       throw Error("PlanarSegmenter(" + name() + "): the backend returned " + std::to_string(labels.size()) +
                   " labels for " + std::to_string(prepared_.size()) + " points");
-    std::size_t smallest = static_cast<std::size_t>(used_min_points_);
-    if (used_min_parallel_points_ > 0 && used_min_parallel_points_ < used_min_points_ && !prepared_.collinear) {
+    std::size_t smallest = static_cast<std::size_t>(min_points_);
+    if (used_min_parallel_points_ > 0 && used_min_parallel_points_ < min_points_ && !prepared_.collinear) {
       // Within 20 degrees: stricter than a backend's own threshold, since a handful of points
       // has no neighbourhood to vouch for it.
       const double min_abs_cosine = std::max(normal_threshold_, 0.94);
