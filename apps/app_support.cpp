@@ -266,7 +266,7 @@ void FusionFlags::addTo(boost::program_options::options_description& options) {
        "with fusion: the fraction of the network's points that unseen primitives keep, in (0, 1] (1: all)")
       ("contradiction-radius", po::value(&contradiction_radius)->default_value(contradiction_radius, shortNumber(contradiction_radius)),
        "with fusion: drop the network's points of a seen face where the scan, within this fraction of the diagonal, "
-       "saw no such face or shows solid (0: off)")
+       "saw no such face, shows solid, or shows air where the face has solid (0: off)")
       ("join-distance", po::value(&join_distance)->default_value(join_distance, shortNumber(join_distance)),
        "with fusion: a seen segment joins another seen face's primitive only when its points lie this close to "
        "that face's plane on average (fraction of the diagonal); a parallel face farther off keeps its own plane");

@@ -1,11 +1,73 @@
 #include "shape_primitives.h"
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <numeric>
 
 namespace paco::test {
+
+SurfaceMesh bothMeshes(const SurfaceMesh& a, const SurfaceMesh& b) {
+  SurfaceMesh both = a;
+  const auto offset = static_cast<std::uint32_t>(a.vertices.size());
+  both.vertices.insert(both.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto face : b.faces) {
+    for (auto& v : face) v += offset;
+    both.faces.push_back(face);
+  }
+  return both;
+}
+
+std::size_t crossingFacePairs(const SurfaceMesh& mesh) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  // Vertices at one position share one index, so that faces meeting there count as adjacent.
+  std::map<std::array<double, 3>, std::uint32_t> index_at;
+  std::vector<std::uint32_t> same(mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Eigen::Vector3d& p = mesh.vertices[v];
+    same[v] = index_at.emplace(std::array<double, 3>{p.x(), p.y(), p.z()}, static_cast<std::uint32_t>(v)).first->second;
+  }
+  const std::size_t nf = mesh.faces.size();
+  std::vector<std::vector<Kernel::Triangle_3>> triangles(nf);
+  std::vector<std::vector<std::uint32_t>> corners(nf);
+  std::vector<Eigen::AlignedBox3d> boxes(nf);
+  auto point = [&](std::uint32_t v) { return Kernel::Point_3(mesh.vertices[v].x(), mesh.vertices[v].y(), mesh.vertices[v].z()); };
+  for (std::size_t f = 0; f < nf; ++f) {
+    std::vector<std::vector<std::uint32_t>> pieces;
+    paco::triangulateFace(mesh, f, pieces);
+    for (const auto& t : pieces) {
+      const Kernel::Triangle_3 triangle(point(t[0]), point(t[1]), point(t[2]));
+      if (!triangle.is_degenerate()) triangles[f].push_back(triangle);
+    }
+    for (std::uint32_t v : mesh.faces[f]) {
+      corners[f].push_back(same[v]);
+      boxes[f].extend(mesh.vertices[v]);
+    }
+    std::sort(corners[f].begin(), corners[f].end());
+  }
+  std::size_t crossing = 0;
+  for (std::size_t a = 0; a < nf; ++a)
+    for (std::size_t b = a + 1; b < nf; ++b) {
+      if (!boxes[a].intersects(boxes[b])) continue;
+      std::vector<std::uint32_t> shared;
+      std::set_intersection(corners[a].begin(), corners[a].end(), corners[b].begin(), corners[b].end(),
+                            std::back_inserter(shared));
+      if (!shared.empty()) continue;
+      bool hit = false;
+      for (const auto& s : triangles[a])
+        for (const auto& t : triangles[b]) hit = hit || CGAL::do_intersect(s, t);
+      crossing += hit;
+    }
+  return crossing;
+}
 
 double diagonalOf(const paco::SurfaceMesh& mesh) {
   Eigen::Vector3d lo, hi;

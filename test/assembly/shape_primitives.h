@@ -20,6 +20,14 @@ std::vector<Plane> facePlanes(const SurfaceMesh& mesh, std::vector<int>* face_pl
 /// One primitive per distinct face plane, with `samples` points (area-uniform, seeded) in total.
 std::vector<PlanarPrimitive> primitivesOf(const SurfaceMesh& mesh, std::size_t samples = 6000,
                                           double angle_cosine = 1 - 1e-6, double offset_fraction = 1e-6);
+/// Both meshes in one, the second's vertex indices shifted past the first's (no vertex shared).
+SurfaceMesh bothMeshes(const SurfaceMesh& a, const SurfaceMesh& b);
+/// Pairs of faces that cross or touch although they share no vertex position (triangulateFace's
+/// triangles against each other, exact predicates); zero for a surface without self-intersections.
+/// analyseTopology counts edges by vertex index and so cannot see two faces passing through each
+/// other. The assemblers keep solids touching at an edge or corner apart by duplicating vertices
+/// there; faces that meet only at such shared positions do not count.
+std::size_t crossingFacePairs(const SurfaceMesh& mesh);
 /// Planar faces after merging edge-adjacent coplanar polygons.
 std::size_t countPlanarRegions(const SurfaceMesh& mesh);
 /// The plane x[axis] = at with outward normal sign * e_axis, and `count` points spread at random

@@ -2,6 +2,7 @@
 // edge or at a corner are separated into manifold sheets by copying the shared vertices.
 #include "mesh_cleanup.h"
 
+#include "shape_primitives.h"
 #include "shapes.h"
 
 #include <gtest/gtest.h>
@@ -12,13 +13,7 @@ using paco::SurfaceMesh;
 
 // Both meshes in one, with the second's vertex indices shifted; shared positions are welded.
 SurfaceMesh joined(const SurfaceMesh& a, const SurfaceMesh& b) {
-  SurfaceMesh m = a;
-  const auto offset = static_cast<std::uint32_t>(a.vertices.size());
-  m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
-  for (auto face : b.faces) {
-    for (auto& v : face) v += offset;
-    m.faces.push_back(face);
-  }
+  SurfaceMesh m = paco::test::bothMeshes(a, b);
   paco::weldVertices(m, 1e-9);
   return m;
 }

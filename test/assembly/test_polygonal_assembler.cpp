@@ -63,6 +63,7 @@ void expectGoodReconstruction(const SurfaceMesh& truth, std::size_t planar_faces
   const paco::MeshTopology topology = paco::analyseTopology(mesh);
   EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
   EXPECT_EQ(topology.components, 1u);
+  EXPECT_EQ(paco::test::crossingFacePairs(mesh), 0u);
   EXPECT_EQ(countPlanarRegions(mesh), planar_faces);
   const double volume = paco::signedVolume(truth);
   EXPECT_NEAR(paco::signedVolume(mesh), volume, 0.01 * volume);
@@ -78,6 +79,17 @@ void expectGoodReconstruction(const SurfaceMesh& truth, std::size_t planar_faces
     ASSERT_NE(match, nullptr) << "face " << f << " lies on no true plane";
     for (auto v : mesh.faces[f]) EXPECT_LT(std::abs(match->signedDistance(mesh.vertices[v])), tolerance);
   }
+}
+
+// The check the tests below use for self-intersections: two boxes that pass through each other
+// cross; two that touch at a corner, each with its own vertex there, do not.
+TEST(TestHelpers, CrossingFacePairsSeesFacesThroughEachOtherNotFacesTouchingAtACorner) {
+  const SurfaceMesh box = paco::test::makeBox({0, 0, 0}, {1, 1, 1});
+  EXPECT_EQ(paco::test::crossingFacePairs(box), 0u);
+  // Each of the second box's three faces at its low corner passes through the first box's two
+  // faces at its high corner that are not parallel to it: 3 x 2.
+  EXPECT_EQ(paco::test::crossingFacePairs(paco::test::bothMeshes(box, paco::test::makeBox({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}))), 6u);
+  EXPECT_EQ(paco::test::crossingFacePairs(paco::test::bothMeshes(box, paco::test::makeBox({1, 1, 1}, {2, 2, 2}))), 0u);
 }
 
 class AssemblyOnShapes : public ::testing::TestWithParam<std::string> {};
@@ -203,6 +215,7 @@ int expectClosedManifolds(const std::function<std::vector<PlanarPrimitive>(unsig
     EXPECT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
     if (!result.ok()) continue;
     EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+    EXPECT_EQ(paco::test::crossingFacePairs(mesh), 0u);
     EXPECT_GT(paco::signedVolume(mesh), 0.0);
     relabelled += result.num_crossings_resolved > 0;
   }
@@ -259,6 +272,7 @@ TEST(CellComplex, ALatticeOfCoveredPlanesGivesAClosedManifoldWithinItsBudget) {
     EXPECT_GT(result.num_cells, 1000u);
     EXPECT_GT(result.num_crossings_resolved, 0);
     EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+    EXPECT_EQ(paco::test::crossingFacePairs(mesh), 0u);
   }
 }
 
@@ -847,6 +861,7 @@ void expectSolidsSeparated(std::size_t components, std::size_t faces, std::size_
   const paco::MeshTopology topology = paco::analyseTopology(mesh);
   EXPECT_TRUE(topology.isClosedManifold()) << topology.describe();
   EXPECT_EQ(topology.components, components);
+  EXPECT_EQ(paco::test::crossingFacePairs(mesh), 0u);
   EXPECT_EQ(mesh.faces.size(), faces);
   EXPECT_EQ(mesh.vertices.size(), vertices);
 }

@@ -738,15 +738,62 @@ TEST(ObservedFusion, ASeenWallsPredictedPointsPastASeenCeilingAreDropped) {
   EXPECT_GE(report.contradicted_points, 100u);
 
   // Seen with the wall's normal the other way (air at y < 0), the ceiling no longer hangs over the
-  // spot in front: every point stays.
+  // spot in front: every point above it stays. It hangs over the spot behind the points below it
+  // instead, and faces it, as it faces the air under it: those within the reach go.
   const Plane wall_facing_back = wall.flipped();
   const std::vector<PlanarPrimitive> observed_back = {observed[0],
                                                       patch(wall_facing_back, {0.5, 0, -0.275}, 0.45, 9, 1.0f)};
-  EXPECT_EQ(fuseWithObserved(completed, observed_back, options)[0].points.size(), 81u + 400u);
+  const PlanarPrimitive fused_back = fuseWithObserved(completed, observed_back, options)[0];
+  const auto above = [](const Eigen::Vector3d& p) { return p.z() > 0.0; };
+  const auto within_reach_below = [](const Eigen::Vector3d& p) { return p.z() < 0.0 && p.z() > -0.26; };
+  EXPECT_EQ(countPoints(fused_back, above), countPoints(completed[0], above));
+  EXPECT_EQ(countPoints(completed[0], within_reach_below), 100u);
+  EXPECT_EQ(countPoints(fused_back, within_reach_below), countPoints(observed_back[1], within_reach_below));
+  EXPECT_EQ(fused_back.points.size(), 81u + 400u - 100u);
 
   // Off with the radius, as every check of the seen faces' predicted points.
   options.contradiction_radius = 0.0;
   EXPECT_EQ(fuseWithObserved(completed, observed, options)[0].points.size(), 81u + 400u);
+}
+
+TEST(ObservedFusion, ASeenTopsPredictedPointsOverASeenSlotAreDropped) {
+  // A slot through a block: the top z = 1 (normal +z) seen at y in 0..0.4 and 0.6..1 (x in
+  // 0.3..0.7), and the slot's walls y = 0.4 (normal +y) and y = 0.6 (normal -y) seen at z in
+  // 0.5..1. The network spreads the top over the slot's opening (rows 0.05 apart). The observed
+  // diagonal is about 1.15, so the radius 0.03 is 0.035, the spot checked lies 1.5 radii (0.052)
+  // below a point and the reach is 6 radii (0.21). Looking along y from the spot below a point
+  // over the opening, the first seen wall faces back at it: the spot is in air, and the point goes.
+  // Below a point over the block the first wall met faces away: it stays.
+  const Plane top = Plane::fromPointAndNormal({0, 0, 1}, {0, 0, 1});
+  const Plane near_wall = Plane::fromPointAndNormal({0, 0.4, 0}, {0, 1, 0});
+  const Plane far_wall = Plane::fromPointAndNormal({0, 0.6, 0}, {0, -1, 0});
+  const std::vector<PlanarPrimitive> observed = {
+      patch(top, {0.5, 0.2, 1}, 0.4, 8, 1.0f), patch(top, {0.5, 0.8, 1}, 0.4, 8, 1.0f),
+      patch(near_wall, {0.5, 0.4, 0.75}, 0.5, 10, 1.0f), patch(far_wall, {0.5, 0.6, 0.75}, 0.5, 10, 1.0f)};
+  // Rows x, y = 0.025, 0.075, ..., 0.975.
+  std::vector<PlanarPrimitive> completed = {patch(top, {0.5, 0.5, 1}, 1.0, 20, 0.9f)};
+  ObservedFusionOptions options = fusionOnly();
+  options.contradiction_radius = 0.03;
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved(completed, observed, options, &report);
+  ASSERT_EQ(fused.size(), 3u);  // the top, and the two walls added as seen
+  const PlanarPrimitive& fused_top = fused[0];
+  ASSERT_LT(maxDistanceToPlane(fused_top, top), 1e-6);
+  // Along the walls' seen length, away from every seen point by more than the radius.
+  const auto over_the_opening = [](const Eigen::Vector3d& p) {
+    return p.x() > 0.3 && p.x() < 0.7 && p.y() > 0.45 && p.y() < 0.55;
+  };
+  const auto over_the_block = [](const Eigen::Vector3d& p) {
+    return p.x() > 0.3 && p.x() < 0.7 && (p.y() < 0.35 || p.y() > 0.65);
+  };
+  EXPECT_EQ(countPoints(completed[0], over_the_opening), 16u);
+  EXPECT_EQ(countPoints(fused_top, over_the_opening), 0u);
+  EXPECT_EQ(countPoints(fused_top, over_the_block), 2u * 56u + countPoints(completed[0], over_the_block));
+  EXPECT_GE(report.contradicted_points, 16u);
+
+  // Off with the radius, as every check of the seen faces' predicted points.
+  options.contradiction_radius = 0.0;
+  EXPECT_EQ(countPoints(fuseWithObserved(completed, observed, options)[0], over_the_opening), 16u);
 }
 
 // Seen from above: a roof z = 1 (10 x 10 points, x and y in 0.05..0.95, spacing 0.1). Predicted:

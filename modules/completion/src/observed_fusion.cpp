@@ -722,10 +722,10 @@ void capProfileEnds(const SeenBox& seen, const std::vector<PlanarPrimitive>& obs
 // plane (the segmenter's inlier distance is 0.004 by default), so they never do.
 constexpr double kContradictionGap = 0.01;
 
-// The check for solid in front of a seen face's point (dropContradicted), chosen on the tuning
-// parts: the spot's distance in front and the reach, in contradiction radii; how square a surface
-// must be to the line to count (the sight lines along the box axes are built with it); how close
-// to the face's plane a box axis must lie.
+// The checks for solid in front of and air behind a seen face's point (dropContradicted), chosen
+// on the tuning parts: the spot's distance in front (behind) and the reach, in contradiction
+// radii; how square a surface must be to the line to count (the sight lines along the box axes are
+// built with it); how close to the face's plane a box axis must lie.
 constexpr double kFrontOffset = 1.5;
 constexpr double kFrontReach = 6.0;
 constexpr double kSquareFacing = 0.906;  // cos 25 degrees
@@ -766,25 +766,30 @@ std::size_t dropContradicted(pcl::PointCloud<pcl::PointNormal>& predicted, const
   // farther in front than the radius, so that lines along the face pass clear of the faces it
   // meets at its own edges; only surfaces within 25 degrees of square to the line count, and only
   // within the reach: farther off, the line may have crossed an unseen surface first.
+  // Just behind the point, where the face has solid, the same with a surface that faces back at
+  // the spot puts it in air: the network carries a top on over a seen slot's opening, or a side
+  // over a seen step, and the assemblers closed them over (forty-fifth session).
   std::vector<std::size_t> in_plane;  // the box axes that lie in the face's plane
   for (std::size_t k = 0; k < along_axes.size(); ++k)
     if (std::abs(n.dot(along_axes.along(k))) < std::sin(degreesToRadians(kInPlaneAxisDegrees))) in_plane.push_back(k);
   const Eigen::Vector3d in_front = kFrontOffset * radius * (n.dot(outward) < 0.0 ? -n : n);
   const double reach = kFrontReach * radius;
-  const auto solid_in_front = [&](const Eigen::Vector3d& q) {
-    const Eigen::Vector3d spot = q + in_front;
+  // Whether a surface met first within the reach, along an in-plane axis, faces back at `spot`
+  // (air around it) or away from it (solid around it).
+  const auto first_met_faces = [&](const Eigen::Vector3d& spot, bool back) {
     for (std::size_t k : in_plane) {
       const SightLines::FirstMet first = along_axes.firstMet(spot, k);
       const double t = along_axes.along(k).dot(spot);
-      if (first.ahead && first.ahead->faces_along && first.ahead->t - t < reach) return true;
-      if (first.behind && !first.behind->faces_along && t - first.behind->t < reach) return true;
+      if (first.ahead && first.ahead->faces_along != back && first.ahead->t - t < reach) return true;
+      if (first.behind && first.behind->faces_along == back && t - first.behind->t < reach) return true;
     }
     return false;
   };
   return keepWhere(predicted, [&](std::size_t i) {
     // The scan saw this spot, and not this face there.
     const bool seen_without_the_face = to_scan[i] < radius && to_own[i] >= radius;
-    return !seen_without_the_face && !inside(queries[i]) && !solid_in_front(queries[i]);
+    return !seen_without_the_face && !inside(queries[i]) && !first_met_faces(queries[i] + in_front, false) &&
+           !first_met_faces(queries[i] - in_front, true);
   });
 }
 

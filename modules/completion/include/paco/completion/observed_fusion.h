@@ -97,7 +97,10 @@ struct ObservedFusionOptions {
   ///  - the spot 1.5 times this distance in front of it (on the side the scan saw the face from)
   ///    is in the seen solid: looking from there along a seen box axis that lies in the face's
   ///    plane, the first seen surface square to the line (within 25 degrees), within 6 times this
-  ///    distance, faces away. A pocket's wall carried on past its seen ceiling goes.
+  ///    distance, faces away. A pocket's wall carried on past its seen ceiling goes; or
+  ///  - the spot as far behind it (on the side where the face has solid) is in seen air: looking
+  ///    from there along such an axis, the first seen surface met within the same reach faces
+  ///    back at it. A top carried on over a seen slot's opening goes.
   /// Points the scan says nothing about stay.
   double contradiction_radius = 0.03;
   /// Unseen completed primitives keep this fraction of their points, evenly spaced (in (0, 1];
