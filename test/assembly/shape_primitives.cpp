@@ -39,7 +39,10 @@ std::size_t crossingFacePairs(const SurfaceMesh& mesh) {
   std::vector<std::vector<Kernel::Triangle_3>> triangles(nf);
   std::vector<std::vector<std::uint32_t>> corners(nf);
   std::vector<Eigen::AlignedBox3d> boxes(nf);
-  auto point = [&](std::uint32_t v) { return Kernel::Point_3(mesh.vertices[v].x(), mesh.vertices[v].y(), mesh.vertices[v].z()); };
+  auto point = [&](std::uint32_t v) {
+    const Eigen::Vector3d& p = mesh.vertices[v];
+    return Kernel::Point_3(p.x(), p.y(), p.z());
+  };
   for (std::size_t f = 0; f < nf; ++f) {
     std::vector<std::vector<std::uint32_t>> pieces;
     paco::triangulateFace(mesh, f, pieces);

@@ -84,12 +84,15 @@ void expectGoodReconstruction(const SurfaceMesh& truth, std::size_t planar_faces
 // The check the tests below use for self-intersections: two boxes that pass through each other
 // cross; two that touch at a corner, each with its own vertex there, do not.
 TEST(TestHelpers, CrossingFacePairsSeesFacesThroughEachOtherNotFacesTouchingAtACorner) {
-  const SurfaceMesh box = paco::test::makeBox({0, 0, 0}, {1, 1, 1});
-  EXPECT_EQ(paco::test::crossingFacePairs(box), 0u);
+  using paco::test::bothMeshes;
+  using paco::test::crossingFacePairs;
+  using paco::test::makeBox;
+  const SurfaceMesh box = makeBox({0, 0, 0}, {1, 1, 1});
+  EXPECT_EQ(crossingFacePairs(box), 0u);
   // Each of the second box's three faces at its low corner passes through the first box's two
   // faces at its high corner that are not parallel to it: 3 x 2.
-  EXPECT_EQ(paco::test::crossingFacePairs(paco::test::bothMeshes(box, paco::test::makeBox({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}))), 6u);
-  EXPECT_EQ(paco::test::crossingFacePairs(paco::test::bothMeshes(box, paco::test::makeBox({1, 1, 1}, {2, 2, 2}))), 0u);
+  EXPECT_EQ(crossingFacePairs(bothMeshes(box, makeBox({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}))), 6u);
+  EXPECT_EQ(crossingFacePairs(bothMeshes(box, makeBox({1, 1, 1}, {2, 2, 2}))), 0u);
 }
 
 class AssemblyOnShapes : public ::testing::TestWithParam<std::string> {};
