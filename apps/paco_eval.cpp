@@ -3,6 +3,7 @@
 //   paco_eval --pred result.obj --gt part.obj
 //   paco_eval --dataset data/mfcad --split val --methods direct,oracle,poisson-qem -o out/eval
 #include "app_support.h"
+#include "plane_size_options.h"
 
 #include <paco/common/error.h>
 #include <paco/common/point_types.h>
@@ -244,10 +245,8 @@ int dataset(const Options& o) {
                                   std::to_string(level));
   for (int view : b.views)
     if (view < 0) throw paco::app::UsageError("--views takes view indices >= 0, got " + std::to_string(view));
-  if (o.segment_min_points != 0 && o.segment_min_points < 3)
-    throw paco::app::UsageError("--min-points must be 0 (" + paco::percentText(paco::kScanMinPlaneFraction) +
-                                " of the input's points) or at least 3, got " +
-                                std::to_string(o.segment_min_points));
+  paco::app::validateMinPoints(o.segment_min_points);
+  paco::app::validateMinParallelPoints(o.segment_min_parallel_points);
   b.limit = o.limit;
   paco::app::validateThreads("--jobs", o.jobs);
   paco::app::validateThreads("--threads", o.threads, "one per hardware thread");
@@ -354,13 +353,11 @@ int run(int argc, char** argv) {
        "polyfit coverage weight (>= 0)")
       ("complexity", po::value(&o.complexity)->default_value(o.complexity, paco::app::shortNumber(o.complexity)),
        "polyfit complexity weight (>= 0)")
-      ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco")
-      ("min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points), ("segmenter: fewest points of a plane, >= 3 (0: " + paco::percentText(paco::kScanMinPlaneFraction) +
-        " of the input's points, at least 3)").c_str())
-      ("min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
-       ("segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: " +
-        paco::percentText(paco::kScanMinParallelPlaneFraction) + " of the input's points, " +
-        paco::percentText(paco::kNoisyScanMinParallelPlaneFraction) + " on a noisy scan; -1: none)").c_str())
+      ("segmenter", po::value(&o.segmenter)->default_value(o.segmenter), "planar segmenter of direct, box-prior and paco");
+  // As paco_reconstruct's, in the same words.
+  paco::app::addMinPointsOption(visible, o.segment_min_points);
+  paco::app::addMinParallelPointsOption(visible, o.segment_min_parallel_points);
+  visible.add_options()
       ("dataset-labels", po::bool_switch(&o.dataset_labels), "direct/box-prior: use the dataset's input labels instead of the segmenter")
       ("max-points", po::value(&o.max_points)->default_value(o.max_points),
        "thin denser inputs to about this many evenly spread points first, as paco_reconstruct (0: keep all)")

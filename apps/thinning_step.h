@@ -2,6 +2,7 @@
 // The working cloud of paco_reconstruct and paco_complete (repeated and stray points left out,
 // dense scans thinned), and the options of that step and of the segmenter, which both tools share.
 #include "app_support.h"
+#include "plane_size_options.h"
 
 #include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/thinning.h>
@@ -19,35 +20,6 @@ namespace paco::app {
 inline void addMaxPointsOption(boost::program_options::options_description& options, std::size_t& max_points) {
   options.add_options()("max-points", boost::program_options::value(&max_points)->default_value(max_points),
                         "thin denser inputs to about this many evenly spread points before segmenting (0: keep all)");
-}
-
-inline void addMinPointsOption(boost::program_options::options_description& options, int& min_points) {
-  options.add_options()("min-points", boost::program_options::value(&min_points)->default_value(min_points),
-                        ("segmenter: fewest points of a plane, >= 3 (0: " + percentText(kScanMinPlaneFraction) +
-                         " of the working cloud's points, at least 3)")
-                            .c_str());
-}
-
-inline void validateMinPoints(int min_points) {
-  if (min_points != 0 && min_points < 3)
-    throw UsageError("--min-points must be 0 (" + percentText(kScanMinPlaneFraction) + " of the points) or at least 3, got " +
-                     std::to_string(min_points));
-}
-
-inline void addMinParallelPointsOption(boost::program_options::options_description& options, int& min_points) {
-  options.add_options()(
-      "min-parallel-points", boost::program_options::value(&min_points)->default_value(min_points),
-      ("segmenter: fewest points of a plane parallel to a larger one, >= 3 (0: " +
-       percentText(kScanMinParallelPlaneFraction) + " of the working cloud's points, " +
-       percentText(kNoisyScanMinParallelPlaneFraction) + " on a noisy scan; -1: none)")
-          .c_str());
-}
-
-inline void validateMinParallelPoints(int min_points) {
-  if (min_points != -1 && min_points != 0 && min_points < 3)
-    throw UsageError("--min-parallel-points must be -1 (none), 0 (" + percentText(kScanMinParallelPlaneFraction) +
-                     " of the points) or at least 3, got " +
-                     std::to_string(min_points));
 }
 
 inline void validateMaxPoints(std::size_t max_points) {

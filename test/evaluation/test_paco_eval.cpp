@@ -119,7 +119,9 @@ TEST(PacoEvalTool, SingleModeRejectsBadInput) {
   for (const auto& [options, message] : std::vector<std::pair<std::string, std::string>>{
            {" --levels 0,3", "--levels takes missing levels 0 (25 %), 1 (50 %) and 2 (75 %), got 3"},
            {" --views -1", "--views takes view indices >= 0, got -1"},
-           {" --min-points 2", "--min-points must be 0 (1 % of the input's points) or at least 3, got 2"},
+           {" --min-points 2", "--min-points must be 0 (1 % of the points) or at least 3, got 2"},
+           {" --min-parallel-points 2",
+            "--min-parallel-points must be -1 (none), 0 (0.15 % of the points) or at least 3, got 2"},
            {" --scanner-at-viewpoint --observed-fusion off", "--scanner-at-viewpoint works through observed fusion"}}) {
     EXPECT_EQ(paco::test::runCommand(paco::test::toolPath("paco_eval") + " --dataset " + quoted(dir.file("none")) +
                                          " -o " + quoted(dir.file("out")) + options,
