@@ -51,6 +51,15 @@ std::vector<PlanarPrimitive> seenBottomAndSide() {
           patch(Plane::fromPointAndNormal({0, 0, 0}, {-1, 0, 0}), {0, 0.5, 0.5}, 1.0, 8, 1.0f)};
 }
 
+// The defaults with a coarse box fill: grid points 0.05 of the diagonal apart, each kept where no
+// fused point lies within 0.05 of the diagonal (0.08 on seenBottomAndSide()'s box).
+ObservedFusionOptions coarseFill() {
+  ObservedFusionOptions options;
+  options.fill_spacing = 0.05;
+  options.fill_empty_radius = 0.05;
+  return options;
+}
+
 double maxDistanceToPlane(const PlanarPrimitive& primitive, const Plane& plane) {
   double largest = 0.0;
   for (const auto& p : primitive.points) largest = std::max(largest, std::abs(plane.signedDistance({p.x, p.y, p.z})));
@@ -293,10 +302,8 @@ TEST(ObservedFusion, TheUncoveredFacesOfTheSeenBoxAreFilled) {
   EXPECT_EQ(report.filled_points, 0u);
   EXPECT_EQ(ObservedFusionOptions{}.fill_spacing, 0.02);  // on by default
 
-  ObservedFusionOptions options;
+  ObservedFusionOptions options = coarseFill();
   options.unseen_point_fraction = 1.0;  // the predicted top keeps all its points
-  options.fill_spacing = 0.05;       // 0.08 apart
-  options.fill_empty_radius = 0.05;  // nothing within 0.08
   const auto fused = fuseWithObserved(completed, observed, options, &report);
   EXPECT_EQ(report.filled_faces, 3u);
   ASSERT_EQ(fused.size(), 6u);
@@ -444,10 +451,8 @@ TEST(ObservedFusion, AKnownExtentMovesTheFilledFacesOutToIt) {
   const std::vector<PlanarPrimitive> observed = seenBottomAndSide();
   const std::vector<PlanarPrimitive> completed = {
       patch(Plane::fromPointAndNormal({0, 0, 0.9375}, {0, 0, 1}), {0.5, 0.5, 0.9375}, 1.0, 10, 0.9f)};
-  ObservedFusionOptions options;
+  ObservedFusionOptions options = coarseFill();
   options.unseen_point_fraction = 1.0;
-  options.fill_spacing = 0.05;
-  options.fill_empty_radius = 0.05;
   options.known_extent_points = {{1.5, 0.5, 0.5}, {0.5, 1.2, 0.5}};
   ObservedFusionReport report;
   const auto fused = fuseWithObserved(completed, observed, options, &report);
@@ -488,9 +493,7 @@ TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
   const Plane floor = Plane::fromPointAndNormal({0, 0, 0.5}, {0, 0, 1});
   observed.push_back(patch(floor, {0.725, 0.275, 0.5}, 0.45, 6, 1.0f));
   observed.push_back(patch(floor, {0.725, 0.725, 0.5}, 0.45, 6, 1.0f));
-  ObservedFusionOptions options;
-  options.fill_spacing = 0.05;       // 0.08 apart
-  options.fill_empty_radius = 0.05;  // nothing within 0.08
+  ObservedFusionOptions options = coarseFill();
   ObservedFusionReport report;
   const auto fused = fuseWithObserved({}, observed, options, &report);
   EXPECT_GT(report.fill_in_seen_free_space, 0u);
@@ -521,6 +524,39 @@ TEST(ObservedFusion, TheBoxFillLeavesOutSpaceTheScanShowsEmpty) {
   EXPECT_GT(report.filled_points, 0u);
 }
 
+TEST(ObservedFusion, TheBoxSideOfANoisySeenFaceIsThatFace) {
+  // seenBottomAndSide() (box x in [0, 0.95], y in [0.05, 0.95], z in [0, 0.9375]; diagonal 1.6)
+  // plus the top z = 0.9375, seen over x < 0.45 only, its points 0.06 above and below it in turn:
+  // noise takes the seen points' box up to z = 0.9975, twice the fusion's plane tolerance (0.02
+  // of the diagonal) above the top. The box's top side is the seen top: the fill adds its points
+  // over x > 0.45 to it, and the side x = 0.95 ends there, rather than a second top plane 0.06
+  // above it (with the seen top, a thin slab).
+  std::vector<PlanarPrimitive> observed = seenBottomAndSide();
+  const Plane top = Plane::fromPointAndNormal({0, 0, 0.9375}, {0, 0, 1});
+  PlanarPrimitive noisy_top = patch(top, {0.225, 0.5, 0.9375}, 0.45, 8, 1.0f);
+  for (std::size_t i = 0; i < noisy_top.points.size(); ++i) noisy_top.points[i].z += (i + i / 8) % 2 ? 0.06f : -0.06f;
+  observed.push_back(noisy_top);
+  ObservedFusionOptions options = coarseFill();
+  ObservedFusionReport report;
+  const auto fused = fuseWithObserved({}, observed, options, &report);
+  EXPECT_GT(report.filled_points, 0u);
+  std::size_t tops = 0;
+  for (const auto& primitive : fused) {
+    const Eigen::Vector3d n = primitive.plane.normal.normalized();
+    if (std::abs(n.z()) > 0.99 && primitive.plane.signedDistance({0, 0, 0}) < -0.5) {
+      ++tops;
+      EXPECT_NEAR(primitive.plane.signedDistance({0, 0, 0.9375}), 0.0, 1e-6) << "a top plane off the seen top";
+      // The seen top's 64 points and the fill's over x > 0.45.
+      EXPECT_GT(primitive.points.size(), 64u + 20u);
+    }
+    if (n.isApprox(Eigen::Vector3d(1, 0, 0), 1e-9)) {
+      EXPECT_GT(primitive.points.size(), 50u);
+      for (const auto& p : primitive.points) EXPECT_LT(p.z, 0.9375f) << "the side x = 0.95 runs past the seen top";
+    }
+  }
+  EXPECT_EQ(tops, 1u);
+}
+
 TEST(ObservedFusion, TheNetworksPointsOfASeenFaceShowFreeSpaceWhereTheScanMissedIt) {
   // As above, but the scan saw the step's floor (z = 0.5, facing up, x in [0.5, 0.95]) only over
   // y < 0.5. The network predicts the whole floor, in two halves. Its points over y > 0.5 show the
@@ -530,9 +566,7 @@ TEST(ObservedFusion, TheNetworksPointsOfASeenFaceShowFreeSpaceWhereTheScanMissed
   observed.push_back(patch(floor, {0.725, 0.275, 0.5}, 0.45, 6, 1.0f));
   const std::vector<PlanarPrimitive> completed = {patch(floor, {0.725, 0.275, 0.5}, 0.45, 6, 0.8f),
                                                   patch(floor, {0.725, 0.725, 0.5}, 0.45, 6, 0.8f)};
-  ObservedFusionOptions options;
-  options.fill_spacing = 0.05;
-  options.fill_empty_radius = 0.05;
+  ObservedFusionOptions options = coarseFill();
   const auto topPointsBeyond = [](const std::vector<PlanarPrimitive>& fused, double x) {
     std::size_t count = 0;
     for (const auto& primitive : fused)
@@ -559,10 +593,8 @@ TEST(ObservedFusion, AnUnseenGuessOfABoxFaceTakesTheFaceAndOutranksTheOtherGuess
   const double tilt = paco::degreesToRadians(5.0);
   const Plane guess = Plane::fromPointAndNormal({0.96, 0.2, 0.2}, {std::cos(tilt), std::sin(tilt), 0.0});
   const std::vector<PlanarPrimitive> completed = {patch(guess, {0.96, 0.2, 0.2}, 0.3, 5, 0.75f)};
-  ObservedFusionOptions options;
+  ObservedFusionOptions options = coarseFill();
   options.unseen_point_fraction = 1.0;
-  options.fill_spacing = 0.05;
-  options.fill_empty_radius = 0.05;
   ObservedFusionReport report;
   const auto fused = fuseWithObserved(completed, seenBottomAndSide(), options, &report);
   EXPECT_EQ(report.box_faces_taken, 1u);

@@ -62,7 +62,9 @@ struct ObservedFusionOptions {
   /// roof the network ran the slopes 6 m below the eaves, and the cell complex closed a solid 58 m
   /// across over a 23 m roof.
   double tilt_margin = 0.02;
-  /// Covers the faces of the observed points' box (on the dominant seen axes) with a grid of
+  /// Covers the faces of the observed points' box (on the dominant seen axes; a side that a seen
+  /// face parallel to it lies on, within four times the RMS distance of its points to its plane,
+  /// is that face's plane: noise carries a scan's outermost points that far off it) with a grid of
   /// points of this spacing (fraction of the box diagonal, at least kMinFillSpacing; 0 = off;
   /// at least four steps across a face), keeping those farther than `fill_empty_radius` (on a
   /// face narrower than four times that but wider than `max_distance`, a quarter of its width, so
