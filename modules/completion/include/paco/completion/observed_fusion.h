@@ -157,6 +157,10 @@ struct ObservedFusionReport {
   std::size_t absorbed = 0; ///< further completed primitives of a seen face, merged into the one that took it
   std::size_t added = 0;    ///< observed segments that matched no completed primitive, added as they are
   std::size_t ignored = 0;  ///< observed segments below min_observed_points
+  /// Seen faces turned onto a seen box axis: off it by less than 4 standard errors of their
+  /// fitted normal (from their points' scatter about the plane; at most max_angle_degrees), as on
+  /// a noisy scan
+  std::size_t squared = 0;
   std::size_t aligned = 0;  ///< unseen completed primitives turned parallel to a seen direction
   std::size_t clipped_points = 0;  ///< completed points dropped outside the observed box + margin
   std::size_t clipped = 0;         ///< unseen completed primitives dropped by the clip
@@ -207,7 +211,9 @@ std::string describe(const ObservedFusionReport& report);
 /// projects its predicted points onto it (dropping those the scan contradicts, see
 /// `contradiction_radius`), adds the observed points and sets its confidence to 1
 /// (the face was seen); later segments on that plane (within `join_distance`) add their points
-/// to it, and parallel ones farther off cannot take it. Other completed
+/// to it, and parallel ones farther off cannot take it. A seen face off a seen box axis by less
+/// than four standard errors of its fitted normal (at most `max_angle_degrees`) is turned onto it
+/// (ObservedFusionReport::squared). Other completed
 /// primitives within the tolerances of the same observed segment are duplicates: their points
 /// are projected onto the chosen one and they are removed. Unmatched observed segments are
 /// appended with confidence 1; unmatched completed primitives are kept, turned parallel to a seen
