@@ -34,6 +34,15 @@ double meanDistance(const pcl::PointCloud<pcl::PointNormal>& points, const Plane
   return count == 0 ? std::numeric_limits<double>::infinity() : sum / static_cast<double>(count);
 }
 
+// Root mean square distance of the points to a plane (0 without points): the scatter of a seen
+// face's points about its fitted plane, its noise.
+double rmsDistance(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& plane) {
+  if (points.empty()) return 0.0;
+  double squares = 0.0;
+  for (const auto& p : points) squares += std::pow(plane.signedDistance(position(p)), 2);
+  return std::sqrt(squares / static_cast<double>(points.size()));
+}
+
 // Moves the points onto the plane and gives them its normal.
 void projectOnto(const Plane& plane, pcl::PointCloud<pcl::PointNormal>& points) {
   for (auto& p : points) {
@@ -158,17 +167,15 @@ double normalStandardError(const PlanarPrimitive& face) {
   for (const auto& p : face.points) mean += position(p);
   mean /= static_cast<double>(n);
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  double squares = 0.0;
   for (const auto& p : face.points) {
     const Eigen::Vector3d d = position(p) - mean;
     scatter += d * d.transpose();
-    squares += std::pow(face.plane.signedDistance(position(p)), 2);
   }
   // The middle eigenvalue: the spread across the narrow way in the plane (the smallest is across it).
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spread(scatter / static_cast<double>(n));
   const double narrow = std::sqrt(std::max(spread.eigenvalues()[1], 0.0));
   if (!(narrow > 0.0)) return 0.0;
-  return std::sqrt(squares / static_cast<double>(n)) / (std::sqrt(static_cast<double>(n)) * narrow);
+  return rmsDistance(face.points, face.plane) / (std::sqrt(static_cast<double>(n)) * narrow);
 }
 
 // Turns a seen face onto the nearest of the box axes (through its points' centroid, keeping its
@@ -224,14 +231,10 @@ void putBoxSidesOnSeenFaces(SeenBox& seen, const std::vector<PlanarPrimitive>& o
     for (const auto& segment : observed) {
       if (!isTrusted(segment, min_points) || std::abs(segment.plane.normal.normalized().dot(axis)) < std::cos(max_angle))
         continue;
-      double mean = 0.0, squares = 0.0;
-      for (const auto& p : segment.points) {
-        mean += position(p).dot(axis);
-        squares += std::pow(segment.plane.signedDistance(position(p)), 2);
-      }
-      const double n = static_cast<double>(segment.points.size());
-      mean /= n;
-      const double reach = kBoxSideNoiseWidths * std::sqrt(squares / n);
+      double mean = 0.0;
+      for (const auto& p : segment.points) mean += position(p).dot(axis);
+      mean /= static_cast<double>(segment.points.size());
+      const double reach = kBoxSideNoiseWidths * rmsDistance(segment.points, segment.plane);
       if (mean - seen.box.min()[k] <= reach && (!low || mean < *low)) low = mean;
       if (seen.box.max()[k] - mean <= reach && (!high || mean > *high)) high = mean;
     }
