@@ -137,8 +137,10 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   /// getMinPointsPerPlane() are freed, and the free points that lie on a plane parallel to a
   /// kept one (within the distance threshold, normals within 20 degrees) form a segment once
   /// there are this many (detail::recoverParallelPlanes). Pocket floors and step faces seen by
-  /// a few points are nearly always parallel to a large face. 0 (default) turns it off; else
-  /// >= 3; at or above getMinPointsPerPlane() it changes nothing.
+  /// a few points are nearly always parallel to a large face. On a noisy scan (noise adaptation
+  /// widened ε), free points that are a kept face's noise (within 4 RMS of its plane and over its
+  /// points) form no plane. 0 (default) turns it
+  /// off; else >= 3; at or above getMinPointsPerPlane() it changes nothing.
   void setMinPointsPerParallelPlane(int min_points);
   int getMinPointsPerParallelPlane() const { return min_parallel_points_; }
 

@@ -122,10 +122,16 @@ void orientEstimatedSegments(const PreparedCloud& prepared, const std::vector<st
 /// supported first), the free points whose normals agree with it (|cos| >= min_abs_cosine) are
 /// sorted by their offset along it, and the 2 x `distance` wide window holding the most of them
 /// becomes a new segment while it holds at least `min_parallel_points` points (>= 3) and its own
-/// least-squares plane is parallel to the direction. Works in the working frame on `labels` (one
-/// per working point); returns the number of segments added.
+/// least-squares plane is parallel to the direction. On a `noisy_scan` (the segmenter widened its
+/// inlier distance to the noise) a window that is a remaining segment's noise tail stays free:
+/// within 4 times the RMS distance of that segment's points to its plane, on average, with 90 % of
+/// its points within two point spacings of one of the segment's points (both projected onto its
+/// plane); those are the points of a face that the inlier distance cut off. On other scans such a
+/// window may be a bend of a face that is not quite flat (a milk carton's top), and is kept. Works
+/// in the working frame on `labels` (one per working point); returns the number of segments added.
 std::size_t recoverParallelPlanes(const PreparedCloud& prepared, std::vector<int>& labels, std::size_t min_points,
-                                  std::size_t min_parallel_points, double distance, double min_abs_cosine);
+                                  std::size_t min_parallel_points, double distance, double min_abs_cosine,
+                                  bool noisy_scan);
 
 /// The indices of the points of each label 0..max (empty for unused labels; -1 left out).
 std::vector<std::vector<int>> membersByLabel(const std::vector<int>& labels);

@@ -152,7 +152,8 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
       // has no neighbourhood to vouch for it.
       const double min_abs_cosine = std::max(normal_threshold_, 0.94);
       detail::recoverParallelPlanes(prepared_, labels, smallest, static_cast<std::size_t>(used_min_parallel_points_),
-                                    used_distance_threshold_, min_abs_cosine);
+                                    used_distance_threshold_, min_abs_cosine,
+                                    used_distance_threshold_ > distance_threshold_);
       smallest = static_cast<std::size_t>(used_min_parallel_points_);
     }
     output = detail::finalizeSegmentation(prepared_, labels, smallest);
