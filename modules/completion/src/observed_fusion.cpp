@@ -885,7 +885,7 @@ std::string describe(const ObservedFusionReport& report) {
          " duplicates absorbed, " + std::to_string(report.added) + " seen faces added" +
          (report.joined ? ", " + std::to_string(report.joined) + " seen segments joined a larger seen face" : "") +
          (report.squared ? ", " + std::to_string(report.squared) +
-                               " noisy seen faces squared to the box's axes" : "") +
+                               " seen faces squared to the box's axes (off them by less than their fit's error)" : "") +
          (report.aligned ? ", " + std::to_string(report.aligned) + " unseen aligned with seen directions" : "") +
          (report.clipped_points ? ", " + std::to_string(report.clipped_points) + " points outside the seen box dropped (" +
                                       std::to_string(report.clipped) + " unseen primitives with them)"
