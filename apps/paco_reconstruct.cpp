@@ -61,6 +61,26 @@ void printHelp(const po::options_description& visible) {
       << visible << std::endl;
 }
 
+// What to try after the assembler failed with `status` (empty when nothing in the tool helps).
+std::string assemblyAdvice(paco::AssemblyStatus status, const std::string& assembler) {
+  const std::string other = assembler == "polyfit" ? "cell-complex" : "polyfit";
+  switch (status) {
+    case paco::AssemblyStatus::TooFewPlanes:
+    case paco::AssemblyStatus::DegeneratePlanes:
+      return "the scan's planes do not enclose a volume (a flat object, or one side of one): scan more of the "
+             "object's sides, or keep smaller planes with --min-points N";
+    case paco::AssemblyStatus::TimeLimit:
+      return "raise --time-limit, or use --assembler cell-complex, which needs no solver";
+    case paco::AssemblyStatus::SolverFailed:
+      return assembler == "polyfit" ? "try --solver glpk, or --assembler cell-complex" : "try --assembler polyfit";
+    case paco::AssemblyStatus::EmptySolution:
+    case paco::AssemblyStatus::NotWatertight:
+      return "try --assembler " + other;
+    default:
+      return "";
+  }
+}
+
 std::string defaultSibling(const std::string& mesh_path, const std::string& suffix) {
   const std::filesystem::path p(mesh_path);
   return (p.parent_path() / (p.stem().string() + suffix)).string();
@@ -197,9 +217,11 @@ int run(int argc, char** argv) {
   const paco::AssemblyResult& result = assembler.reconstruct(mesh);
   timer.stop();
   if (result.status == paco::AssemblyStatus::Interrupted) throw paco::InterruptedError(result.message);
-  if (!result.ok())
+  if (!result.ok()) {
+    const std::string advice = assemblyAdvice(result.status, o.assembler);
     throw paco::Error("assembly (" + o.assembler + ") failed: " + paco::toString(result.status) +
-                      (result.message.empty() ? "" : ": " + result.message));
+                      (result.message.empty() ? "" : ": " + result.message) + (advice.empty() ? "" : "; " + advice));
+  }
   std::printf("assemble (%s): %zu faces, %zu vertices, %s\n", o.assembler.c_str(), mesh.faces.size(),
               mesh.vertices.size(), result.topology.describe().c_str());
   if (!result.message.empty()) std::printf("  note: %s\n", result.message.c_str());

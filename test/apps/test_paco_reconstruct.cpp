@@ -690,6 +690,24 @@ TEST(PacoReconstruct, AHandfulOfPointsIsRefused) {
   }
 }
 
+// A flat object's scan is one plane: no volume to close. The error says so and what to try.
+TEST(PacoReconstruct, AFlatScanSaysWhyNoVolumeCloses) {
+  TempDir dir;
+  std::string grid;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) grid += std::to_string(i / 29.0) + " " + std::to_string(j / 29.0) + " 0\n";
+  paco::test::writeBytes(dir.file("flat.xyz"), grid);
+  std::string log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("flat.xyz")) + " -o " + quoted(dir.file("m.obj")) +
+                                       " --no-completion",
+                                   &log),
+            1)
+      << log;
+  EXPECT_NE(log.find("too-few-planes"), std::string::npos) << log;
+  EXPECT_NE(log.find("scan more of the object's sides"), std::string::npos) << log;
+  EXPECT_EQ(filesIn(dir.path()), 1u);
+}
+
 TEST(PacoReconstruct, MissingModelIsAClearError) {
   TempDir dir;
   std::string log;
