@@ -220,7 +220,8 @@ int run(int argc, char** argv) {
   if (!result.ok()) {
     const std::string advice = assemblyAdvice(result.status, o.assembler);
     throw paco::Error("assembly (" + o.assembler + ") failed: " + paco::toString(result.status) +
-                      (result.message.empty() ? "" : ": " + result.message) + (advice.empty() ? "" : "; " + advice));
+                      (result.message.empty() ? "" : ": " + result.message) +
+                      (advice.empty() ? "" : "; " + advice));
   }
   std::printf("assemble (%s): %zu faces, %zu vertices, %s\n", o.assembler.c_str(), mesh.faces.size(),
               mesh.vertices.size(), result.topology.describe().c_str());

@@ -253,7 +253,8 @@ TEST(ObservedFusion, ANoisySeenFaceOffABoxAxisByLessThanItsFitErrorIsSquaredToIt
   auto fused = fuseWithObserved(guess, observed, fusionOnly(), &report);
   ASSERT_EQ(report.snapped, 1u);
   EXPECT_EQ(report.squared, 1u);  // the strip only: the bottom and the side are square already
-  EXPECT_NE(describe(report).find("1 seen faces squared to the box's axes (off them by less than their fit's error)"), std::string::npos)
+  EXPECT_NE(describe(report).find("1 seen faces squared to the box's axes (off them by less than their fit's error)"),
+            std::string::npos)
       << describe(report);
   EXPECT_TRUE(fused[0].plane.normal.isApprox(Eigen::Vector3d(0, 1, 0), 1e-9)) << fused[0].plane.normal.transpose();
   EXPECT_NEAR(fused[0].plane.signedDistance({0.5, 1.0, 0.5}), 0.0, 1e-6);  // through the strip's centroid

@@ -139,8 +139,8 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   /// there are this many (detail::recoverParallelPlanes). Pocket floors and step faces seen by
   /// a few points are nearly always parallel to a large face. On a noisy scan (noise adaptation
   /// widened ε), free points that are a kept face's noise (within 4 RMS of its plane and over its
-  /// points) form no plane. 0 (default) turns it
-  /// off; else >= 3; at or above getMinPointsPerPlane() it changes nothing.
+  /// points) form no plane. 0 (default) turns it off; else >= 3; at or above
+  /// getMinPointsPerPlane() it changes nothing.
   void setMinPointsPerParallelPlane(int min_points);
   int getMinPointsPerParallelPlane() const { return min_parallel_points_; }
 
