@@ -36,8 +36,8 @@ constexpr double kNoiseTailOver = 0.9;
 // A kept segment that a window of free points may be the noise tail of.
 class KeptFace {
  public:
-  KeptFace(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& members)
-      : points_(&points), members_(&members), plane_(fitPlane(points, members)) {
+  KeptFace(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& members, const Plane& plane)
+      : points_(&points), members_(&members), plane_(plane) {
     for (const int i : members) rms_ += std::pow(plane_.signedDistance(at(i)), 2);
     rms_ = std::sqrt(rms_ / static_cast<double>(members.size()));
   }
@@ -98,15 +98,16 @@ std::size_t recoverParallelPlanes(const PreparedCloud& prepared, std::vector<int
   // The directions of the planes that stay, most supported first, each once. Points of segments
   // too small to stay are free again: they may belong to a small parallel plane.
   std::vector<std::pair<std::size_t, Eigen::Vector3d>> supported;
-  std::vector<KeptFace> kept;
+  std::vector<KeptFace> kept;  // on a noisy scan only: the faces whose noise tails stay free
   for (const auto& group : groups) {
     if (group.size() < min_points) {
       for (const int i : group) labels[static_cast<std::size_t>(i)] = -1;
       continue;
     }
     try {
-      kept.emplace_back(points, group);
-      supported.emplace_back(group.size(), kept.back().plane().normal);
+      const Plane plane = fitPlane(points, group);
+      supported.emplace_back(group.size(), plane.normal);
+      if (noisy_scan) kept.emplace_back(points, group, plane);
     } catch (const InvalidInputError&) {
       continue;  // collinear: no direction
     }
@@ -159,8 +160,8 @@ std::size_t recoverParallelPlanes(const PreparedCloud& prepared, std::vector<int
       }
       if (!parallel) continue;
       // The scatter of a kept face cut off by the inlier distance is that face, not a new one:
-      // its points stay free.
-      if (noisy_scan && std::any_of(kept.begin(), kept.end(), [&](KeptFace& face) {
+      // its points stay free (`kept` is empty unless the scan is noisy).
+      if (std::any_of(kept.begin(), kept.end(), [&](KeptFace& face) {
             if (std::abs(face.plane().normal.dot(direction)) <= kParallelCosine || !face.withinScatter(members))
               return false;
             if (tail_radius < 0.0) tail_radius = 2.0 * prepared.averageSpacing();
