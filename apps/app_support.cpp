@@ -221,6 +221,11 @@ std::string noisyScanNote(double set, double used) {
   return text;
 }
 
+std::string exactScanNote(int set, int used) {
+  if (!(used < set)) return {};
+  return " (" + std::to_string(set) + " on a scan with noise)";
+}
+
 void addNoiseAdaptationOption(boost::program_options::options_description& options, double& multiple) {
   options.add_options()("noise-adaptation",
                         boost::program_options::value(&multiple)->default_value(multiple, shortNumber(multiple)),

@@ -101,6 +101,10 @@ std::string shortNumber(double value);
 /// (PlanarSegmenter::setNoiseAdaptation) raised the segmenter's ε from `set` to `used`, else "".
 std::string noisyScanNote(double set, double used);
 
+/// " (N on a scan with noise)" when an exact scan lowered the segmenter's plane minimum from
+/// `set` (N) to `used` (PlanarSegmenter::getUsedMinPointsPerPlane), else "".
+std::string exactScanNote(int set, int used);
+
 /// --noise-adaptation M (PlanarSegmenter::setNoiseAdaptation) of paco_reconstruct, paco_complete,
 /// paco_eval and paco_segment (the default is the caller's), and its check: 0 (off) or a finite
 /// positive number, else a UsageError.

@@ -244,7 +244,8 @@ int run(int argc, char** argv) {
       ("segment", po::bool_switch(&o.segment), "label inputs with PlanarSegmenter (default: GT faces of the visible points)")
       ("segment-min-points", po::value(&o.segment_min_points)->default_value(o.segment_min_points),
        ("with --segment: the smallest plane in points; 0: " + paco::percentText(paco::kScanMinPlaneFraction) +
-        " of each input's points, as paco_reconstruct does").c_str())
+        " of each input's points, " + paco::percentText(paco::kExactScanMinPlaneFraction) +
+        " on an input without noise, as paco_reconstruct does").c_str())
       ("segment-min-parallel-points", po::value(&o.segment_min_parallel_points)->default_value(o.segment_min_parallel_points),
        ("with --segment: the smallest plane parallel to a larger one, in points; 0: " +
         paco::percentText(paco::kScanMinParallelPlaneFraction) + " of each input's points, as paco_reconstruct does; "

@@ -187,9 +187,11 @@ int run(int argc, char** argv) {
       parallel_points > 0 ? ", parallel to a larger one >= " + std::to_string(parallel_points) : std::string();
   const std::string noisy =
       paco::app::noisyScanNote(segmenter->getDistanceThreshold(), segmenter->getUsedDistanceThreshold());
-  std::printf("segment (%s, planes of >= %d points%s%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
-              segmenter->getMinPointsPerPlane(), parallel.c_str(), noisy.c_str(), segmentation.size(),
-              100.0 * segmentation.coverage());
+  const std::string exact =
+      paco::app::exactScanNote(segmenter->getMinPointsPerPlane(), segmenter->getUsedMinPointsPerPlane());
+  std::printf("segment (%s, planes of >= %d points%s%s%s): %zu planes, coverage %.1f %%\n", o.segmenter.c_str(),
+              segmenter->getUsedMinPointsPerPlane(), exact.c_str(), parallel.c_str(), noisy.c_str(),
+              segmentation.size(), 100.0 * segmentation.coverage());
   if (segmentation.empty())
     throw paco::InvalidInputError("'" + o.input + "': no planar segment found; is it a piecewise-planar object?");
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");

@@ -14,7 +14,8 @@ namespace paco::app {
 inline void addMinPointsOption(boost::program_options::options_description& options, int& min_points) {
   options.add_options()("min-points", boost::program_options::value(&min_points)->default_value(min_points),
                         ("segmenter: fewest points of a plane, >= 3 (0: " + percentText(kScanMinPlaneFraction) +
-                         " of the points segmented, after thinning, at least 3)")
+                         " of the points segmented, after thinning, " + percentText(kExactScanMinPlaneFraction) +
+                         " on an exact scan without noise; at least 3)")
                             .c_str());
 }
 

@@ -33,7 +33,9 @@ int main(int argc, char** argv) {
     auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>("gocopp");
     segmenter->setInputCloud(cloud);
     segmenter->setDistanceThreshold(0.004);  // fraction of the bounding-box diagonal
-    segmenter->setMinPointsPerPlane(paco::scanMinPointsPerPlane(cloud->size()));  // as paco_reconstruct
+    // paco_reconstruct's plane minimums (1 % of the points; 0.25 % on an exact scan; 0.15 % for a
+    // plane parallel to a larger one) and its widening of the inlier distance on a noisy scan.
+    paco::setScanDefaults(*segmenter, cloud->size(), 0, 0);
     paco::PlanarSegmentation segmentation;
     segmenter->segment(segmentation);
     std::cout << "segments: " << segmentation.size() << "\n";

@@ -150,7 +150,7 @@ TEST(PacoSegment, NoiseAdaptationWidensTheInlierDistanceOnANoisyScan) {
   EXPECT_EQ(log.find("inlier distance raised"), std::string::npos) << log;
   EXPECT_LT(labelledShare(dir.file("fixed.pcd")), 0.5) << log;
 
-  ASSERT_EQ(test::runCommand(tool + quoted(dir.file("adapted.pcd")) + " --noise-adaptation 2.5", &log), 0) << log;
+  ASSERT_EQ(test::runCommand(tool + quoted(dir.file("adapted.pcd")) + " --noise-adaptation 2.8", &log), 0) << log;
   EXPECT_NE(log.find("gocopp: 6 planes"), std::string::npos) << log;
   EXPECT_NE(log.find("inlier distance raised to"), std::string::npos) << log;
   EXPECT_GT(labelledShare(dir.file("adapted.pcd")), 0.9) << log;

@@ -69,7 +69,7 @@ void EfficientRansacSegmenter<PointT>::performSegmentation(std::vector<int>& lab
   detector.template add_shape_factory<PlaneShape>();
   typename Detector::Parameters parameters;
   parameters.probability = probability_;
-  parameters.min_points = static_cast<std::size_t>(this->min_points_);
+  parameters.min_points = static_cast<std::size_t>(this->used_min_points_);
   parameters.epsilon = this->used_distance_threshold_;
   parameters.normal_threshold = this->normal_threshold_;
   parameters.cluster_epsilon = cluster_epsilon_ > 0.0 ? cluster_epsilon_ : 3.0 * prepared.averageSpacing();

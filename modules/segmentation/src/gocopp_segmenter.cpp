@@ -31,7 +31,7 @@ void GoCoPPSegmenter<PointT>::performSegmentation(std::vector<int>& labels) {
   GoCoPPParameters parameters;
   parameters.epsilon = this->used_distance_threshold_;  // the working frame has a unit diagonal
   parameters.normal_threshold = this->normal_threshold_;
-  parameters.min_points = this->min_points_;
+  parameters.min_points = this->used_min_points_;
   parameters.neighbours = this->neighbours_;
   parameters.lambda_simplicity = lambda_simplicity_;
   parameters.lambda_completeness = lambda_completeness_;

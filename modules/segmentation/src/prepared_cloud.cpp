@@ -42,6 +42,12 @@ Eigen::Vector3d principalVariances(const pcl::PointCloud<pcl::PointNormal>& clou
 constexpr double kLayerGapRatio = 4.0;
 // Each layer holds at least this many of the neighbours.
 constexpr std::size_t kMinLayerPoints = 3;
+// A neighbour counts towards a point's scatter only when its normal is within about 32 degrees of
+// the point's (|cos|, the segmenter's default τ): the neighbours across an edge lie on another
+// face, and their distance to a plane through both faces is the edge's shape, not noise.
+constexpr double kNoiseNormalAgreement = 0.85;
+// A point with fewer agreeing neighbours (a corner, a sliver of a face) is not read.
+constexpr std::size_t kMinAgreeingNeighbours = 6;
 
 // The covariance of `points` (about each group's own mean when `group` splits them; divided by
 // the count) and its eigen decomposition.
@@ -122,12 +128,18 @@ double PreparedCloud::noiseLevel(int k, double quantile) const {
   const int wanted = std::min<int>(k + 1, static_cast<int>(n));
   const std::size_t stride = std::max<std::size_t>(1, n / 5000);
   std::vector<double> scatter;
-  pcl::Indices found;
+  pcl::Indices found, agreeing;
   std::vector<float> sq_distances;
   for (std::size_t i = 0; i < n; i += stride) {
     tree->nearestKSearch((*points)[i], wanted, found, sq_distances);
-    scatter.push_back(scatterOffSurface(*points, found));
+    const Eigen::Vector3f normal = (*points)[i].getNormalVector3fMap();
+    agreeing.clear();
+    for (const auto j : found)
+      if (std::abs(normal.dot((*points)[static_cast<std::size_t>(j)].getNormalVector3fMap())) >= kNoiseNormalAgreement)
+        agreeing.push_back(j);
+    if (agreeing.size() >= kMinAgreeingNeighbours) scatter.push_back(scatterOffSurface(*points, agreeing));
   }
+  if (scatter.empty()) return 0.0;
   const std::size_t at = std::min(scatter.size() - 1, static_cast<std::size_t>(quantile * static_cast<double>(scatter.size() - 1) + 0.5));
   std::nth_element(scatter.begin(), scatter.begin() + static_cast<std::ptrdiff_t>(at), scatter.end());
   return scatter[at];

@@ -32,7 +32,7 @@ void RansacSegmenter<PointT>::performSegmentation(std::vector<int>& labels) {
   const auto& points = *prepared.points;
   pcl::IndicesPtr remaining(new pcl::Indices(points.size()));
   for (std::size_t i = 0; i < points.size(); ++i) (*remaining)[i] = static_cast<pcl::index_t>(i);
-  const auto min_points = static_cast<std::size_t>(this->min_points_);
+  const auto min_points = static_cast<std::size_t>(this->used_min_points_);
 
   pcl::SACSegmentation<pcl::PointNormal> sac(false);  // fixed seed: repeatable
   sac.setModelType(pcl::SACMODEL_PLANE);

@@ -27,7 +27,7 @@ void RegionGrowingSegmenter<PointT>::performSegmentation(std::vector<int>& label
   growing.setInputNormals(prepared.points);
   growing.setSearchMethod(prepared.tree);
   growing.setNumberOfNeighbours(static_cast<unsigned int>(this->neighbours_));
-  growing.setMinClusterSize(this->min_points_);
+  growing.setMinClusterSize(this->used_min_points_);
   growing.setMaxClusterSize(std::numeric_limits<int>::max());
   // Compare with the seed's normal, not the previous point's: planes, not smooth surfaces.
   growing.setSmoothModeFlag(false);

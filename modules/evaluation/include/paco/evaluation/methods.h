@@ -46,7 +46,7 @@ constexpr std::size_t kDefaultInputPointBudget = 20000;
 constexpr int kMaxEnsembleTurns = 24;
 /// The segmenter's default noise adaptation (MethodOptions::segment_noise_adaptation;
 /// paco::kScanNoiseMultiple, restated since paco::segmentation is optional here).
-constexpr double kDefaultNoiseAdaptation = 2.5;
+constexpr double kDefaultNoiseAdaptation = 2.8;
 
 /// Parameters shared by every method.
 struct MethodOptions {
@@ -67,7 +67,8 @@ struct MethodOptions {
   /// (default "gocopp").
   std::string segmenter = "gocopp";
   /// The segmenter's fewest points per plane (PlanarSegmenter::setMinPointsPerPlane): 0 (default)
-  /// for paco::scanMinPointsPerPlane of the input's points, as paco_reconstruct, else >= 3.
+  /// for the tools' rule (paco::setScanMinimums: paco::scanMinPointsPerPlane of the input's
+  /// points, fewer on an exact scan), as paco_reconstruct, else >= 3 on every scan.
   int segment_min_points = 0;
   /// Smaller planes parallel to a kept one (PlanarSegmenter::setMinPointsPerParallelPlane), as
   /// paco::scanMinPointsPerParallelPlane reads it: 0 (default, as the tools) for

@@ -59,12 +59,15 @@ struct PreparedCloud {
   /// Mean distance of a point to its 6 nearest neighbours, averaged over the cloud (working frame).
   double averageSpacing() const;
   /// How far points scatter off their surface (working frame): for each point, the RMS distance
-  /// of its k nearest neighbours and itself to their least-squares plane; the `quantile` of
-  /// those over the cloud (on clouds above 10,000 points, every (n / 5,000)-th). Neighbourhoods
-  /// across an edge scatter too, so a low quantile reads the flat parts: on clean scans it is
-  /// near 0, on noisy ones near the noise's standard deviation. A neighbourhood whose distances
-  /// to that plane fall into two layers, with a gap over four times their own spread, counts its
-  /// spread within the layers: the two sides of a wall a few point spacings thin are not noise.
+  /// of those of its k nearest neighbours and itself whose normals are within about 32 degrees
+  /// of its own (at least 6, else the point is skipped) to their least-squares plane; the
+  /// `quantile` of those over the cloud (on clouds above 10,000 points, every (n / 5,000)-th;
+  /// 0 when no point is read). The normal test leaves the neighbours across an edge out (they
+  /// made parts with many small faces read as noisy), and a low quantile reads the flat parts:
+  /// on clean scans it is 0, on noisy ones near the noise's standard deviation. A neighbourhood
+  /// whose distances to that plane fall into two layers, with a gap over four times their own
+  /// spread, counts its spread within the layers: the two sides of a wall a few point spacings
+  /// thin are not noise.
   double noiseLevel(int k, double quantile) const;
 
  private:

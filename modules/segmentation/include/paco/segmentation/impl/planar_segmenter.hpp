@@ -48,6 +48,14 @@ void PlanarSegmenter<PointT>::setMinPointsPerPlane(int min_points) {
 }
 
 template <typename PointT>
+void PlanarSegmenter<PointT>::setExactScanMinPointsPerPlane(int min_points) {
+  if (min_points != 0 && min_points < 3)
+    throw InvalidInputError("PlanarSegmenter::setExactScanMinPointsPerPlane: 0 (no change) or at least 3 points; got " +
+                            std::to_string(min_points));
+  exact_min_points_ = min_points;
+}
+
+template <typename PointT>
 void PlanarSegmenter<PointT>::setMinPointsPerParallelPlane(int min_points) {
   if (min_points != 0 && min_points < 3)
     throw InvalidInputError("PlanarSegmenter::setMinPointsPerParallelPlane: 0 (off) or at least 3 points; got " +
@@ -133,10 +141,15 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
     // Adaptation only widens ε, and never beyond kMaxNoiseAdaptedDistance (a wider ε set by the
     // user stays).
     used_distance_threshold_ = distance_threshold_;
-    if (noise_multiple_ > 0.0 && !prepared_.collinear)
-      used_distance_threshold_ = std::max(
-          distance_threshold_, std::min(kMaxNoiseAdaptedDistance,
-                                        noise_multiple_ * prepared_.noiseLevel(kNoiseNeighbours, kNoiseQuantile)));
+    used_min_points_ = min_points_;
+    const bool exact_minimum_applies = exact_min_points_ > 0 && exact_min_points_ < min_points_;
+    if ((noise_multiple_ > 0.0 || exact_minimum_applies) && !prepared_.collinear) {
+      const double noise_level = prepared_.noiseLevel(kNoiseNeighbours, kNoiseQuantile);
+      if (noise_multiple_ > 0.0)
+        used_distance_threshold_ =
+            std::max(distance_threshold_, std::min(kMaxNoiseAdaptedDistance, noise_multiple_ * noise_level));
+      if (exact_minimum_applies && noise_level <= kExactScanNoiseLevel) used_min_points_ = exact_min_points_;
+    }
     // A widened ε means a noisy scan: the noisy-scan parallel minimum applies where larger.
     used_min_parallel_points_ = min_parallel_points_;
     if (used_distance_threshold_ > distance_threshold_ && min_parallel_points_ > 0)
@@ -146,8 +159,8 @@ void PlanarSegmenter<PointT>::segment(PlanarSegmentation& output) {
     if (labels.size() != prepared_.size())
       throw Error("PlanarSegmenter(" + name() + "): the backend returned " + std::to_string(labels.size()) +
                   " labels for " + std::to_string(prepared_.size()) + " points");
-    std::size_t smallest = static_cast<std::size_t>(min_points_);
-    if (used_min_parallel_points_ > 0 && used_min_parallel_points_ < min_points_ && !prepared_.collinear) {
+    std::size_t smallest = static_cast<std::size_t>(used_min_points_);
+    if (used_min_parallel_points_ > 0 && used_min_parallel_points_ < used_min_points_ && !prepared_.collinear) {
       // Within 20 degrees: stricter than a backend's own threshold, since a handful of points
       // has no neighbourhood to vouch for it.
       const double min_abs_cosine = std::max(normal_threshold_, 0.94);
