@@ -721,6 +721,22 @@ TEST(NoiseLevel, TheEdgesOfManySmallFacesAreNotNoise) {
   EXPECT_EQ(seg->getUsedMinPointsPerPlane(), exactScanMinPointsPerPlane(gear.cloud->size(), 0)) << "an exact scan";
 }
 
+// A blob of random points is no surface: whatever its estimated normals, it is not an exact
+// scan, and the tools keep the 1 % minimum.
+TEST(NoiseLevel, ARandomBlobIsNotAnExactScan) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr blob(new pcl::PointCloud<pcl::PointXYZ>);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> coordinate(0.0f, 1.0f);
+  for (int i = 0; i < 2048; ++i) blob->push_back(pcl::PointXYZ(coordinate(rng), coordinate(rng), coordinate(rng)));
+  auto seg = makePlanarSegmenter<pcl::PointXYZ>("gocopp");
+  setScanDefaults(*seg, blob->size(), 0, 0);
+  seg->setInputCloud(blob);
+  PlanarSegmentation result;
+  seg->segment(result);
+  EXPECT_GT(seg->prepared().noiseLevel(kNoiseNeighbours, kNoiseQuantile), kExactScanNoiseLevel);
+  EXPECT_EQ(seg->getUsedMinPointsPerPlane(), seg->getMinPointsPerPlane());
+}
+
 TEST(NoiseAdaptation, ANoisyBoxGetsOnePlanePerFace) {
   const LabelledSample box = noisyBox(0.01);
   // The tools' plane minimums alone: the inlier band (0.4 % of the diagonal) is far below the
