@@ -211,7 +211,9 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
  protected:
   /// Labels the points of prepared(): `labels` arrives with prepared().size() entries set to -1;
   /// set each to a segment number (any non-negative integers; they are renumbered) or leave -1.
-  /// Thresholds in the working frame are the relative ones above, as they are.
+  /// Thresholds in the working frame are the relative ones above, as they are; read ε and the
+  /// plane minimum of this call from used_distance_threshold_ and used_min_points_ (a noisy scan
+  /// widens the one, an exact scan lowers the other).
   virtual void performSegmentation(std::vector<int>& labels) = 0;
 
   using pcl::PCLBase<PointT>::input_;
