@@ -137,4 +137,25 @@ void flattenPrimitives(const std::vector<PlanarPrimitive>& primitives,
     }
 }
 
+namespace {
+double squaredDistance(const Plane& plane, const pcl::PointNormal& p) {
+  return std::pow(plane.signedDistance(Eigen::Vector3d(p.x, p.y, p.z)), 2);
+}
+}  // namespace
+
+double rmsDistance(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& plane) {
+  if (points.empty()) return 0.0;
+  double squares = 0.0;
+  for (const auto& p : points) squares += squaredDistance(plane, p);
+  return std::sqrt(squares / static_cast<double>(points.size()));
+}
+
+double rmsDistance(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& indices,
+                   const Plane& plane) {
+  if (indices.empty()) return 0.0;
+  double squares = 0.0;
+  for (const int i : indices) squares += squaredDistance(plane, points[static_cast<std::size_t>(i)]);
+  return std::sqrt(squares / static_cast<double>(indices.size()));
+}
+
 }  // namespace paco

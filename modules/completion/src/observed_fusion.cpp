@@ -34,15 +34,6 @@ double meanDistance(const pcl::PointCloud<pcl::PointNormal>& points, const Plane
   return count == 0 ? std::numeric_limits<double>::infinity() : sum / static_cast<double>(count);
 }
 
-// Root mean square distance of the points to a plane (0 without points): the scatter of a seen
-// face's points about its fitted plane, its noise.
-double rmsDistance(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& plane) {
-  if (points.empty()) return 0.0;
-  double squares = 0.0;
-  for (const auto& p : points) squares += std::pow(plane.signedDistance(position(p)), 2);
-  return std::sqrt(squares / static_cast<double>(points.size()));
-}
-
 // Moves the points onto the plane and gives them its normal.
 void projectOnto(const Plane& plane, pcl::PointCloud<pcl::PointNormal>& points) {
   for (auto& p : points) {

@@ -1,6 +1,7 @@
 #include <paco/segmentation/prepared_cloud.h>
 
 #include <paco/common/error.h>
+#include <paco/common/primitive.h>
 
 #include <Eigen/Core>
 #include <pcl/point_types.h>
@@ -37,10 +38,7 @@ constexpr double kNoiseTailOver = 0.9;
 class KeptFace {
  public:
   KeptFace(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& members, const Plane& plane)
-      : points_(&points), members_(&members), plane_(plane) {
-    for (const int i : members) rms_ += std::pow(plane_.signedDistance(at(i)), 2);
-    rms_ = std::sqrt(rms_ / static_cast<double>(members.size()));
-  }
+      : points_(&points), members_(&members), plane_(plane), rms_(rmsDistance(points, members, plane)) {}
 
   const Plane& plane() const { return plane_; }
 
@@ -81,7 +79,7 @@ class KeptFace {
   const pcl::PointCloud<pcl::PointNormal>* points_;
   const std::vector<int>* members_;
   Plane plane_;
-  double rms_ = 0.0;
+  double rms_;
   std::shared_ptr<pcl::search::KdTree<pcl::PointXYZ>> flat_tree_;
 };
 

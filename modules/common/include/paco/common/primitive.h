@@ -57,6 +57,12 @@ std::vector<PlanarPrimitive> makePrimitives(const pcl::PointCloud<pcl::PointNorm
 std::vector<PlanarPrimitive> makePrimitives(const pcl::PointCloud<pcl::PointXYZ>& cloud,
                                             const PlanarSegmentation& segmentation);
 
+/// Root mean square distance of the points to `plane` (0 without points): the scatter of a face's
+/// points about its fitted plane, its noise. The second form reads the points `indices` names.
+double rmsDistance(const pcl::PointCloud<pcl::PointNormal>& points, const Plane& plane);
+double rmsDistance(const pcl::PointCloud<pcl::PointNormal>& points, const std::vector<int>& indices,
+                   const Plane& plane);
+
 /// All inliers of all primitives as one cloud, with a label per point (the primitive index).
 void flattenPrimitives(const std::vector<PlanarPrimitive>& primitives,
                        pcl::PointCloud<pcl::PointNormal>& cloud, std::vector<int>& labels);

@@ -14,6 +14,16 @@
 
 namespace paco {
 
+namespace detail {
+// The check of the plane-count setters whose 0 means `zero_means` ("off", "no change"): else a
+// count needs at least 3 points, the fewest of a plane.
+inline void checkOptionalPlaneCount(const std::string& setter, const std::string& zero_means, int min_points) {
+  if (min_points != 0 && min_points < 3)
+    throw InvalidInputError("PlanarSegmenter::" + setter + ": 0 (" + zero_means + ") or at least 3 points; got " +
+                            std::to_string(min_points));
+}
+}  // namespace detail
+
 template <typename PointT>
 void PlanarSegmenter<PointT>::setDistanceThreshold(double fraction_of_diagonal) {
   if (!(fraction_of_diagonal > 0.0 && fraction_of_diagonal < 1.0))
@@ -49,25 +59,19 @@ void PlanarSegmenter<PointT>::setMinPointsPerPlane(int min_points) {
 
 template <typename PointT>
 void PlanarSegmenter<PointT>::setExactScanMinPointsPerPlane(int min_points) {
-  if (min_points != 0 && min_points < 3)
-    throw InvalidInputError("PlanarSegmenter::setExactScanMinPointsPerPlane: 0 (no change) or at least 3 points; got " +
-                            std::to_string(min_points));
+  detail::checkOptionalPlaneCount("setExactScanMinPointsPerPlane", "no change", min_points);
   exact_min_points_ = min_points;
 }
 
 template <typename PointT>
 void PlanarSegmenter<PointT>::setMinPointsPerParallelPlane(int min_points) {
-  if (min_points != 0 && min_points < 3)
-    throw InvalidInputError("PlanarSegmenter::setMinPointsPerParallelPlane: 0 (off) or at least 3 points; got " +
-                            std::to_string(min_points));
+  detail::checkOptionalPlaneCount("setMinPointsPerParallelPlane", "off", min_points);
   min_parallel_points_ = min_points;
 }
 
 template <typename PointT>
 void PlanarSegmenter<PointT>::setNoisyScanMinPointsPerParallelPlane(int min_points) {
-  if (min_points != 0 && min_points < 3)
-    throw InvalidInputError("PlanarSegmenter::setNoisyScanMinPointsPerParallelPlane: 0 (no change) or at least 3 "
-                            "points; got " + std::to_string(min_points));
+  detail::checkOptionalPlaneCount("setNoisyScanMinPointsPerParallelPlane", "no change", min_points);
   noisy_min_parallel_points_ = min_points;
 }
 
