@@ -15,10 +15,11 @@
 # noise to the training inputs (paco_train --augment-jitter); --orientation is paco_train's
 # --input-orientation (default: the starting model's, else as-is); --run names the run folder
 # under WORK_DIR (default: run). --segment-min-points is paco_dataset's: 0 (default) labels the
-# inputs with planes of 1.5 % of their points, as paco_reconstruct segments, into WORK_DIR/data;
+# inputs with planes as paco_reconstruct segments (1 % of their points, 0.25 % on an input without
+# noise, as these are), into WORK_DIR/data;
 # N > 0 uses planes of N points, into WORK_DIR/data_minN (the models up to the eleventh session's
 # were trained on --segment-min-points 50). --segment-min-parallel-points is paco_dataset's too:
-# N >= 0 also labels small planes parallel to a larger one (0: 0.5 % of the points, as the tools
+# N >= 0 also labels small planes parallel to a larger one (0: 0.15 % of the points, as the tools
 # do by default), into a folder with the suffix _parN; the default, -1, labels none.
 # --single-scanner-views N > 0 also trains on what one scanner sees from each of N viewpoints
 # (paco_dataset --mode visibility --single-scanner, the part at the 25 % level, labelled the same
@@ -30,7 +31,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 if [ $# -lt 1 ]; then
-  sed -n 2,25p "$0" >&2
+  sed -n '2,/^# Needs the MFCAD/p' "$0" >&2
   exit 2
 fi
 work=$1

@@ -192,7 +192,8 @@ std::string DatasetInfo::describe() const {
   } else {
     out << "PlanarSegmenter, planes of at least "
         << (segment_min_points > 0 ? std::to_string(segment_min_points) + " points"
-                                   : std::string("the tools' rule (1 % of the input's points since 2026-12-05, 1.5 % before)"));
+                                   : std::string("the tools' rule (1 % of the input's points, 0.25 % on an input without noise since "
+                                               "2026-12-07; 1 % since 2026-12-05, 1.5 % before)"));
     if (segment_min_parallel_points >= 0)
       out << ", planes parallel to a larger one of at least "
           << (segment_min_parallel_points > 0 ? std::to_string(segment_min_parallel_points) + " points"
