@@ -118,21 +118,32 @@ std::vector<Eigen::Vector3d> seenDirections(const SeenNormals& seen) {
   return directions;
 }
 
-// Turns the primitive's plane onto the nearest direction within max_angle (keeping its outward
-// side), through its points' centroid; true when it turned.
-bool alignWithNearest(PlanarPrimitive& primitive, const std::vector<Eigen::Vector3d>& directions, double max_angle) {
-  const Eigen::Vector3d normal = primitive.plane.normal.normalized();
-  const Eigen::Vector3d* nearest = nullptr;
+// The direction nearest to an unoriented normal, and the angle to it (nullptr and pi/2 when there
+// is none).
+struct NearestDirection {
+  const Eigen::Vector3d* direction = nullptr;
+  double angle = kPi / 2.0;
+};
+
+NearestDirection nearestDirection(const Eigen::Vector3d& normal, const std::vector<Eigen::Vector3d>& directions) {
+  NearestDirection nearest;
   double best = -1.0;
   for (const auto& d : directions) {
     const double c = std::abs(normal.dot(d));
     if (c > best) {
       best = c;
-      nearest = &d;
+      nearest.direction = &d;
     }
   }
-  if (!nearest || std::acos(std::min(1.0, best)) > max_angle) return false;
-  const Eigen::Vector3d turned = normal.dot(*nearest) < 0.0 ? -*nearest : *nearest;
+  if (nearest.direction) nearest.angle = std::acos(std::min(1.0, best));
+  return nearest;
+}
+
+// Turns the primitive's plane onto `direction` (keeping its outward side), through its points'
+// centroid.
+void turnOnto(PlanarPrimitive& primitive, const Eigen::Vector3d& direction) {
+  const Eigen::Vector3d normal = primitive.plane.normal.normalized();
+  const Eigen::Vector3d turned = normal.dot(direction) < 0.0 ? -direction : direction;
   Eigen::Vector3d pivot = primitive.plane.foot();
   if (!primitive.points.empty()) {
     pivot.setZero();
@@ -141,6 +152,14 @@ bool alignWithNearest(PlanarPrimitive& primitive, const std::vector<Eigen::Vecto
   }
   primitive.plane = Plane::fromPointAndNormal(pivot, turned);
   projectOnto(primitive.plane, primitive.points);
+}
+
+// Turns the primitive's plane onto the nearest direction within max_angle (keeping its outward
+// side), through its points' centroid; true when it turned.
+bool alignWithNearest(PlanarPrimitive& primitive, const std::vector<Eigen::Vector3d>& directions, double max_angle) {
+  const NearestDirection nearest = nearestDirection(primitive.plane.normal.normalized(), directions);
+  if (!nearest.direction || nearest.angle > max_angle) return false;
+  turnOnto(primitive, *nearest.direction);
   return true;
 }
 
@@ -178,12 +197,12 @@ double normalStandardError(const PlanarPrimitive& face) {
 // the cell complex). A clean scan fits its planes far more closely, so a face tilted on purpose
 // (a draft angle) keeps its tilt, and a face already on an axis is left alone.
 bool squareNoisySeenFace(PlanarPrimitive& face, const std::vector<Eigen::Vector3d>& axes, double max_angle) {
-  const Eigen::Vector3d normal = face.plane.normal.normalized();
-  double closest = 0.0;
-  for (const auto& axis : axes) closest = std::max(closest, std::abs(normal.dot(axis)));
-  const double off = std::acos(std::min(1.0, closest));
-  if (!(off > 1e-9) || off > std::min(max_angle, kSquareStandardErrors * normalStandardError(face))) return false;
-  return alignWithNearest(face, axes, max_angle);
+  const NearestDirection nearest = nearestDirection(face.plane.normal.normalized(), axes);
+  if (!nearest.direction || !(nearest.angle > 1e-9) ||
+      nearest.angle > std::min(max_angle, kSquareStandardErrors * normalStandardError(face)))
+    return false;
+  turnOnto(face, *nearest.direction);
+  return true;
 }
 
 // The box of the observed points on the dominant seen axes (the coordinate axes without them).
