@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <pcl/common/centroid.h>
 
 #include <algorithm>
 #include <array>
@@ -171,18 +172,12 @@ constexpr double kSquareStandardErrors = 4.0;
 // plane over the square root of their count times their spread (standard deviation) across the
 // face's narrow way; 0 for fewer than three points.
 double normalStandardError(const PlanarPrimitive& face) {
-  const std::size_t n = face.points.size();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  Eigen::Vector4d centroid = Eigen::Vector4d::Zero();
+  const std::size_t n = pcl::computeMeanAndCovarianceMatrix(face.points, covariance, centroid);
   if (n < 3) return 0.0;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& p : face.points) mean += position(p);
-  mean /= static_cast<double>(n);
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const auto& p : face.points) {
-    const Eigen::Vector3d d = position(p) - mean;
-    scatter += d * d.transpose();
-  }
   // The middle eigenvalue: the spread across the narrow way in the plane (the smallest is across it).
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spread(scatter / static_cast<double>(n));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spread(covariance);
   const double narrow = std::sqrt(std::max(spread.eigenvalues()[1], 0.0));
   if (!(narrow > 0.0)) return 0.0;
   return rmsDistance(face.points, face.plane) / (std::sqrt(static_cast<double>(n)) * narrow);
