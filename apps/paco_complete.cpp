@@ -141,9 +141,14 @@ int run(int argc, char** argv) {
               scan.has_normals ? ", with normals" : "");
   paco::app::reportCoordinateOffset(scan.coordinate_offset);
   paco::app::ScanKnowledge scan_knowledge = knowledge.inWorkingFrame(scan.coordinate_offset);
-  // Labels name input points, so a labelled input is used as it is.
-  const auto cloud = o.use_labels ? std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points)
-                                  : o.scan.workingCloudOf(scan.points, timer);
+  // Labels name input points, so a labelled input keeps every point, in order.
+  std::shared_ptr<pcl::PointCloud<pcl::PointNormal>> cloud;
+  if (o.use_labels) {
+    cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
+    paco::app::reportNormalSides(paco::app::turnInwardNormals(*cloud, o.scan.keep_inward_normals));
+  } else {
+    cloud = o.scan.workingCloudOf(scan.points, timer);
+  }
 
   paco::PlanarSegmentation segmentation;
   timer.start("segment");

@@ -1,9 +1,10 @@
 // The whole pipeline on shapes unlike MFCAD's cube-stock parts, as a user's scans might be: thin
-// plates and slabs, sheet-metal profiles, stairs, a building scanned without its ground or its roof. Each
-// shape is sampled uniformly by area (normals left for the segmenter to estimate, as in an .xyz
-// scan), run through `paco` as paco_reconstruct runs it (the shipped model or MODEL, four turns,
-// fusion and the box fill), and scored against the true mesh. Prints a Markdown table
-// (doc/results.md, twenty-ninth session).
+// plates and slabs, sheet-metal profiles, stairs, a building scanned without its ground or its
+// roof, a room scanned from inside. Each shape is sampled uniformly by area (normals left for the
+// segmenter to estimate, as in an .xyz scan; the room also with its normals given, facing into it
+// as a scanner inside gives them), run through `paco` as paco_reconstruct runs it (the shipped
+// model or MODEL, four turns, fusion and the box fill), and scored against the true mesh. Prints a
+// Markdown table (doc/results.md, twenty-ninth session).
 // Usage: paco_shape_check [POINTS] [MODEL]   (POINTS default 8000)
 #include "shapes.h"
 
@@ -27,6 +28,7 @@ struct Shape {
   std::string name;
   paco::SurfaceMesh mesh;
   std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)> scanned;  // point, normal
+  bool normals_facing_in = false;  // given, facing into the shape; else estimated
 };
 
 bool everywhere(const Eigen::Vector3d&, const Eigen::Vector3d&) { return true; }
@@ -62,6 +64,12 @@ std::vector<Shape> shapes() {
                   everywhere});
   list.push_back({"sheet-metal square tube 0.6 x 0.6, 0.05 thick", paco::test::makeSquareTube(0.6, 0.05, 1.0),
                   everywhere});
+  const auto from_inside = [](const Eigen::Vector3d& p, const Eigen::Vector3d&) {
+    return paco::test::seenFromInsideTheLShapedRoom(p);
+  };
+  list.push_back({"L-shaped room 6 x 7 x 2.6 m from inside, a wall and half the ceiling unseen",
+                  paco::test::makeLShapedRoom(), from_inside});
+  list.push_back({"the same room, its normals given (facing in)", paco::test::makeLShapedRoom(), from_inside, true});
   return list;
 }
 
@@ -76,8 +84,8 @@ int main(int argc, char** argv) {
     const std::size_t points = argc > 1 ? std::stoul(argv[1]) : 8000;
     if (points < 100) throw paco::InvalidInputError("POINTS must be at least 100");
     pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
-    std::printf("%zu points per shape, uniform by area, normals estimated; `paco` with the %s model\n\n", points,
-                argc > 2 ? argv[2] : "shipped");
+    std::printf("%zu points per shape, uniform by area, normals estimated unless given; `paco` with the %s model\n\n",
+                points, argc > 2 ? argv[2] : "shipped");
     std::printf("| shape | assembler | result | faces | CD | HD (pred→true / true→pred) | volume / true |\n|---|---|---|---|---|---|---|\n");
     for (const Shape& shape : shapes()) {
       const paco::SurfaceSample sample = paco::sampleSurface(shape.mesh, points, 7);
@@ -86,7 +94,10 @@ int main(int argc, char** argv) {
         if (!shape.scanned(sample.points[i], sample.normals[i])) continue;
         pcl::PointNormal p;
         p.getVector3fMap() = sample.points[i].cast<float>();
-        p.normal_x = p.normal_y = p.normal_z = 0.0f;  // estimated, as for an .xyz scan
+        if (shape.normals_facing_in)
+          p.getNormalVector3fMap() = -sample.normals[i].cast<float>();
+        else
+          p.normal_x = p.normal_y = p.normal_z = 0.0f;  // estimated, as for an .xyz scan
         in.input.push_back(p);
       }
       for (const std::string assembler : {"polyfit", "cell-complex"}) {

@@ -14,6 +14,7 @@
 #include <paco/encoding/plane_proxy_encoder.h>
 #include <paco/io/cloud_io.h>
 #include <paco/io/mesh_io.h>
+#include <paco/segmentation/normal_sides.h>
 #include <paco/segmentation/planar_segmenter.h>
 
 #include <iostream>
@@ -28,6 +29,9 @@ int main(int argc, char** argv) {
     // 0 for the object's size (UTM, national grids) come relative to scan.coordinate_offset.
     const paco::io::LabelledCloud scan = paco::io::loadCloud(argv[1]);
     auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
+    // Normals that face the scan's middle as a whole (a room scanned from inside) turned outwards,
+    // as paco_reconstruct does: the assemblers build the solid the normals face away from.
+    paco::turnInwardNormalsOutward(*cloud);
 
     // Stage 1: planar segmentation. Other backends: "region-growing", "ransac", "efficient-ransac".
     auto segmenter = paco::makePlanarSegmenter<pcl::PointNormal>("gocopp");

@@ -330,6 +330,41 @@ TEST(PacoReconstruct, ThinSheetMetalProfilesCloseAtTheirEnds) {
   }
 }
 
+// An L-shaped room scanned from inside: its normals face into the room, and the assemblers
+// read the space a face's normal points into as outside. Before the tools turned such normals
+// outwards, the cell complex kept the space beyond the walls as solid (three components, 7.2 x
+// 10.3 x 6.8 for a room 6 x 7 x 2.6). Now both assemblers give the room's volume, its unseen wall
+// and ceiling closed by the box fill.
+TEST(PacoReconstruct, ARoomScannedFromInsideIsTheRoomsVolume) {
+  TempDir dir;
+  paco::io::LabelledCloud scan;
+  scan.has_normals = true;
+  scan.points = *paco::test::scanLShapedRoomFromInside(8000, 7);
+  paco::io::saveCloud(dir.file("room.pcd"), scan);
+  for (const std::string assembler : {"polyfit", "cell-complex"}) {
+    SCOPED_TRACE(assembler);
+    paco::SurfaceMesh mesh;
+    const std::string log = reconstructWithoutTheNetwork(dir, dir.file("room.pcd"), assembler, mesh);
+    EXPECT_NE(log.find("normals: 100 % face the middle of the scan"), std::string::npos) << log;
+    EXPECT_NE(log.find("turned outwards"), std::string::npos) << log;
+    const paco::MeshTopology topology = paco::analyseTopology(mesh);
+    EXPECT_TRUE(topology.isClosedManifold()) << log;
+    EXPECT_EQ(topology.components, 1u) << log;
+    Eigen::Vector3d lo, hi;
+    paco::boundingBox(mesh, lo, hi);
+    EXPECT_LT(lo.norm(), 0.03) << lo.transpose();
+    EXPECT_LT((hi - Eigen::Vector3d(6, 7, 2.6)).norm(), 0.03) << hi.transpose() << "\n" << log;
+    EXPECT_NEAR(paco::signedVolume(mesh), paco::test::kLShapedRoomVolume, 0.01 * paco::test::kLShapedRoomVolume)
+        << log;
+  }
+  // Kept as they are, the tool says what it expects of them.
+  paco::SurfaceMesh kept;
+  const std::string kept_log =
+      reconstructWithoutTheNetwork(dir, dir.file("room.pcd"), "polyfit", kept, " --keep-inward-normals");
+  EXPECT_NE(kept_log.find("kept so (--keep-inward-normals)"), std::string::npos) << kept_log;
+  EXPECT_EQ(kept_log.find("turned outwards"), std::string::npos) << kept_log;
+}
+
 // A scan of the box [0,2] x [0,1] x [0,1] that stopped at x = 1 ends there; told that the object
 // reaches x = 2, the box fill closes the hidden side there, and the mesh reaches it.
 TEST(PacoReconstruct, AKnownExtentClosesTheHiddenSideThere) {

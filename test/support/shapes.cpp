@@ -123,4 +123,18 @@ FaceLabelledScan scanByFace(const SurfaceMesh& mesh, std::size_t count, std::uin
   return scan;
 }
 
+SurfaceMesh makeLShapedRoom() { return makePrism({{0, 0}, {6, 0}, {6, 4}, {3, 4}, {3, 7}, {0, 7}}, 2.6); }
+
+bool seenFromInsideTheLShapedRoom(const Eigen::Vector3d& x) {
+  const bool far_wall = x.y() > 7.0 - 1e-6;
+  const bool ceiling_beyond_3 = x.z() > 2.6 - 1e-6 && x.y() > 3.0;
+  return !far_wall && !ceiling_beyond_3;
+}
+
+pcl::PointCloud<pcl::PointNormal>::Ptr scanLShapedRoomFromInside(std::size_t count, std::uint64_t seed) {
+  const FaceLabelledScan scan = scanByFace(makeLShapedRoom(), count, seed, seenFromInsideTheLShapedRoom);
+  for (auto& p : *scan.cloud) p.getNormalVector3fMap() = -p.getNormalVector3fMap();
+  return scan.cloud;
+}
+
 }  // namespace paco::test

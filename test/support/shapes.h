@@ -52,4 +52,15 @@ struct FaceLabelledScan {
 FaceLabelledScan scanByFace(const SurfaceMesh& mesh, std::size_t count, std::uint64_t seed,
                             const std::function<bool(const Eigen::Vector3d&)>& keep = nullptr);
 
+/// An L-shaped room as a solid (makePrism): floor plan (0,0) (6,0) (6,4) (3,4) (3,7) (0,7), 2.6
+/// high, of volume kLShapedRoomVolume.
+SurfaceMesh makeLShapedRoom();
+constexpr double kLShapedRoomVolume = (6.0 * 4.0 + 3.0 * 3.0) * 2.6;
+/// What a scanner inside that room sees of its surface: all but the wall at y = 7 and the
+/// ceiling beyond y = 3.
+bool seenFromInsideTheLShapedRoom(const Eigen::Vector3d& x);
+/// `count` points sampled over the room's surface (scanByFace), those seenFromInsideTheLShapedRoom,
+/// every normal facing into the room, as a scanner inside gives them.
+pcl::PointCloud<pcl::PointNormal>::Ptr scanLShapedRoomFromInside(std::size_t count, std::uint64_t seed);
+
 }  // namespace paco::test

@@ -9,6 +9,7 @@
 #include <paco/assembly/polygonal_assembler.h>
 #endif
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
+#include <paco/segmentation/normal_sides.h>
 #include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/thinning.h>
 #endif
@@ -447,15 +448,20 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
   MethodOutput out;
   try {
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
-    // As paco_reconstruct: repeated points left out, dense inputs thinned. Not with dataset
-    // labels, which name the input's points. The time counts as the segmentation's.
+    // As paco_reconstruct: repeated points left out, dense inputs thinned (not with dataset
+    // labels, which name the input's points), and normals that face the middle as a whole turned
+    // outwards (which keeps every point). The time counts as the segmentation's.
     pcl::PointCloud<pcl::PointNormal> working;
-    const bool changed = !options.use_dataset_labels && !reads_input_labels &&
+    const bool thinned = !options.use_dataset_labels && !reads_input_labels &&
                          prepareScanPoints(input.input, options.max_input_points, working).changed();
-    if (changed) {
+    const bool inwards = normalSides(thinned ? working : input.input).faceInwards();
+    if (thinned || inwards) {
       MethodInput prepared = input;
-      prepared.input = std::move(working);
-      prepared.input_labels.clear();
+      if (thinned) {
+        prepared.input = std::move(working);
+        prepared.input_labels.clear();
+      }
+      turnInwardNormalsOutward(prepared.input);
       const double preparation_seconds = secondsSince(start);
       out = function(prepared, options);
       out.seconds["segment"] += preparation_seconds;

@@ -1,12 +1,13 @@
 #pragma once
-// Everything of paco::segmentation: the PlanarSegmenter base, its four backends, the factory and
-// the thinning of dense scans.
+// Everything of paco::segmentation: the PlanarSegmenter base, its four backends, the factory, the
+// thinning of dense scans and the side a scan's normals face.
 // Usage:
 //   #include <paco/segmentation/segmentation.h>
 //   auto seg = paco::makePlanarSegmenter<pcl::PointXYZ>("region-growing");
 //   seg->setInputCloud(cloud); paco::PlanarSegmentation result; seg->segment(result);
 #include <paco/segmentation/efficient_ransac_segmenter.h>
 #include <paco/segmentation/gocopp_segmenter.h>
+#include <paco/segmentation/normal_sides.h>
 #include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/ransac_segmenter.h>
 #include <paco/segmentation/region_growing_segmenter.h>
