@@ -64,7 +64,8 @@ void printHelp(const po::options_description& visible) {
             << "groups for PolyFit / Easy3D (.vg ascii, .bvg binary). Distances are fractions of the\n"
             << "bounding-box diagonal, so the same settings work in any unit. Points with NaN/Inf\n"
             << "coordinates are dropped with a warning; missing normals are estimated. On a noisy scan,\n"
-            << "--noise-adaptation 2.5 widens --epsilon to the noise, as paco_reconstruct does by default.\n\n"
+            << "--noise-adaptation " << paco::app::shortNumber(paco::kScanNoiseMultiple)
+            << " widens --epsilon to the noise, as paco_reconstruct does by default.\n\n"
             << "Backends: " << backends << " (default gocopp).\n\n"
             << visible << std::endl;
 }
