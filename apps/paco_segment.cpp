@@ -3,6 +3,7 @@
 //   paco_segment scan.ply -o labelled.pcd --vg planes.vg
 //   paco_segment scan.xyz -o labelled.pcd --backend ransac --epsilon 0.01
 #include "app_support.h"
+#include "thinning_step.h"
 
 #include <paco/common/error.h>
 #include <paco/io/cloud_io.h>
@@ -39,6 +40,7 @@ struct Options {
   double noise_adaptation = 0.0;
   unsigned int threads = 0;
   bool ignore_normals = false;
+  bool keep_inward_normals = false;
   // Above this many points a thinned copy is segmented and every point labelled from it:
   // segmenting 1 million points took 29 s, 10 million more than 2 minutes.
   std::size_t max_points = 1000000;
@@ -63,7 +65,9 @@ void printHelp(const po::options_description& visible) {
             << "with a per-point \"label\" field (-1: no plane) and, with --vg, the planes and their point\n"
             << "groups for PolyFit / Easy3D (.vg ascii, .bvg binary). Distances are fractions of the\n"
             << "bounding-box diagonal, so the same settings work in any unit. Points with NaN/Inf\n"
-            << "coordinates are dropped with a warning; missing normals are estimated. On a noisy scan,\n"
+            << "coordinates are dropped with a warning; missing normals are estimated; given normals that\n"
+            << "face the scan's middle as a whole (a room scanned from inside) are turned outwards, as the\n"
+            << "other tools do, and written so (--keep-inward-normals keeps them). On a noisy scan,\n"
             << "--noise-adaptation " << paco::app::shortNumber(paco::kScanNoiseMultiple)
             << " widens --epsilon to the noise, as paco_reconstruct does by default.\n\n"
             << "Backends: " << backends << " (default gocopp).\n\n"
@@ -156,6 +160,7 @@ int run(int argc, char** argv) {
        "nearest of its 8 nearest kept points whose plane it lies within the inlier distance of; 0: segment every "
        "point");
   paco::app::addNoiseAdaptationOption(general, o.noise_adaptation);
+  paco::app::addKeepInwardNormalsOption(general, o.keep_inward_normals);
   po::options_description gocopp("gocopp options");
   gocopp.add_options()
       ("lambda-simplicity", po::value(&o.lambda_simplicity)->default_value(o.lambda_simplicity, "1"), "weight of the number of planes, [0, 3)")
@@ -208,6 +213,8 @@ int run(int argc, char** argv) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     for (auto& p : cloud.points) p.normal_x = p.normal_y = p.normal_z = nan;
   }
+  // As paco_reconstruct: so that the planes written face out of the solid the normals enclose.
+  paco::app::reportNormalSides(paco::app::turnInwardNormals(cloud.points, o.keep_inward_normals));
 
   // The segmenter's input: the cloud's points, or a thinned copy made straight from them (a
   // full copy first would cost another 480 MB for 10 million points).

@@ -1,6 +1,7 @@
 #pragma once
 // The working cloud of paco_reconstruct and paco_complete (repeated and stray points left out,
-// dense scans thinned), and the options of that step and of the segmenter, which both tools share.
+// dense scans thinned, normals facing inwards turned), and the options of that step and of the
+// segmenter, which both tools share; paco_segment turns inward normals the same way.
 #include "app_support.h"
 #include "plane_size_options.h"
 
@@ -53,8 +54,8 @@ inline NormalSides turnInwardNormals(pcl::PointCloud<pcl::PointNormal>& cloud, b
 inline void reportNormalSides(const NormalSides& sides) {
   if (sides.turned)
     std::printf("normals: %.0f %% face the middle of the scan, as in a room scanned from inside or when turned "
-                "towards a point inside the object; turned outwards, so that the mesh is the solid they enclose "
-                "(--keep-inward-normals keeps them)\n",
+                "towards a point inside the object; turned outwards, so that the faces built on them face out of "
+                "the solid they enclose (--keep-inward-normals keeps them)\n",
                 100.0 * sides.inwardShare());
   else if (sides.faceInwards())
     std::printf("normals: %.0f %% face the middle of the scan, kept so (--keep-inward-normals): the assemblers take "

@@ -53,6 +53,39 @@ TEST(PacoSegment, WritesALabelledPcdAndVertexGroups) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("labelled.partial.pcd")));
 }
 
+// A room scanned from inside, normals facing into it: as the other tools, paco_segment turns them
+// outwards, so that the planes it writes face out of the room's volume (the floor down, the ceiling
+// up) and paco_assemble builds the room from them; --keep-inward-normals keeps them as given.
+TEST(PacoSegment, TurnsTheNormalsOfARoomScannedFromInsideOutwards) {
+  test::TempDir dir;
+  io::LabelledCloud room;
+  room.has_normals = true;
+  room.points = *test::scanLShapedRoomFromInside(6000, 5);
+  io::saveCloud(dir.file("room.pcd"), room);
+  const std::string tool = quoted(test::toolPath("paco_segment")) + " " + quoted(dir.file("room.pcd")) + " -o " +
+                           quoted(dir.file("labelled.pcd")) + " --vg " + quoted(dir.file("planes.vg"));
+  for (const bool keep : {false, true}) {
+    SCOPED_TRACE(keep ? "kept" : "turned");
+    std::string log;
+    ASSERT_EQ(test::runCommand(tool + (keep ? " --keep-inward-normals" : ""), &log), 0) << log;
+    EXPECT_NE(log.find(keep ? "kept so (--keep-inward-normals)" : "turned outwards"), std::string::npos) << log;
+    const io::VertexGroups groups = io::loadVertexGroups(dir.file("planes.vg"));
+    std::size_t floors = 0;
+    for (const Plane& plane : groups.segmentation.planes) {
+      if (std::abs(plane.normal.z()) < 0.99 || std::abs(plane.offset) > 1e-3) continue;  // the floor, z = 0
+      ++floors;
+      EXPECT_NEAR(plane.normal.z(), keep ? 1.0 : -1.0, 1e-3);
+    }
+    EXPECT_EQ(floors, 1u);
+    const io::LabelledCloud labelled = io::loadCloud(dir.file("labelled.pcd"));
+    ASSERT_EQ(labelled.points.size(), room.points.size());
+    for (std::size_t i = 0; i < room.points.size(); ++i)
+      ASSERT_EQ(labelled.points[i].getNormalVector3fMap(),
+                (keep ? 1.0f : -1.0f) * room.points[i].getNormalVector3fMap())
+          << i;
+  }
+}
+
 // A cloud above --max-points: a thinned copy is segmented, and every point gets the label of its
 // nearest kept point on that plane, and its estimated normal. The six faces come out as six
 // planes, each point on its own face's plane.
