@@ -252,6 +252,20 @@ std::string reconstructWithoutTheNetwork(const TempDir& dir, const std::string& 
   return log;
 }
 
+// Expects `mesh` to be one closed solid spanning the box from the origin to `far_corner` (within
+// 0.03) with `volume` (within 1 %); `log` is the tool's, printed on failure.
+void expectOneSolid(const paco::SurfaceMesh& mesh, const Eigen::Vector3d& far_corner, double volume,
+                    const std::string& log) {
+  const paco::MeshTopology topology = paco::analyseTopology(mesh);
+  EXPECT_TRUE(topology.isClosedManifold()) << log;
+  EXPECT_EQ(topology.components, 1u) << log;
+  Eigen::Vector3d lo, hi;
+  paco::boundingBox(mesh, lo, hi);
+  EXPECT_LT(lo.norm(), 0.03) << lo.transpose();
+  EXPECT_LT((hi - far_corner).norm(), 0.03) << hi.transpose() << "\n" << log;
+  EXPECT_NEAR(paco::signedVolume(mesh), volume, 0.01 * volume) << log;
+}
+
 }  // namespace
 
 // A plate 1 x 1 x 0.04 scanned on its two sides only: the network adds nothing (--threshold 1), so
@@ -349,15 +363,7 @@ TEST(PacoReconstruct, ARoomScannedFromInsideIsTheRoomsVolume) {
     const std::string log = reconstructWithoutTheNetwork(dir, dir.file("room.pcd"), assembler, mesh);
     EXPECT_NE(log.find("normals: 100 % face the middle of the scan"), std::string::npos) << log;
     EXPECT_NE(log.find("turned outwards"), std::string::npos) << log;
-    const paco::MeshTopology topology = paco::analyseTopology(mesh);
-    EXPECT_TRUE(topology.isClosedManifold()) << log;
-    EXPECT_EQ(topology.components, 1u) << log;
-    Eigen::Vector3d lo, hi;
-    paco::boundingBox(mesh, lo, hi);
-    EXPECT_LT(lo.norm(), 0.03) << lo.transpose();
-    EXPECT_LT((hi - Eigen::Vector3d(6, 7, 2.6)).norm(), 0.03) << hi.transpose() << "\n" << log;
-    EXPECT_NEAR(paco::signedVolume(mesh), paco::test::kLShapedRoomVolume, 0.01 * paco::test::kLShapedRoomVolume)
-        << log;
+    expectOneSolid(mesh, {6, 7, 2.6}, paco::test::kLShapedRoomVolume, log);
   }
   // Kept as they are, the tool says what it expects of them.
   paco::SurfaceMesh kept;
@@ -425,14 +431,7 @@ TEST(PacoReconstruct, AFurnishedRoomScannedFromInsideIsItsAir) {
     paco::SurfaceMesh mesh;
     const std::string log = reconstructWithoutTheNetwork(dir, dir.file("furnished.pcd"), assembler, mesh);
     EXPECT_NE(log.find("turned outwards"), std::string::npos) << log;
-    const paco::MeshTopology topology = paco::analyseTopology(mesh);
-    EXPECT_TRUE(topology.isClosedManifold()) << log;
-    EXPECT_EQ(topology.components, 1u) << log;
-    Eigen::Vector3d lo, hi;
-    paco::boundingBox(mesh, lo, hi);
-    EXPECT_LT(lo.norm(), 0.03) << lo.transpose();
-    EXPECT_LT((hi - Eigen::Vector3d(w, d, h)).norm(), 0.03) << hi.transpose();
-    EXPECT_NEAR(paco::signedVolume(mesh), air, 0.01 * air) << log;
+    expectOneSolid(mesh, {w, d, h}, air, log);
   }
 }
 
