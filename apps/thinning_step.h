@@ -41,7 +41,7 @@ inline void addKeepInwardNormalsOption(boost::program_options::options_descripti
   options.add_options()("keep-inward-normals", boost::program_options::bool_switch(&keep),
                         "keep given normals that face the middle of the scan as a whole (a room scanned from inside, "
                         "or normals turned towards a viewpoint inside the object); by default they are turned "
-                        "outwards, and the mesh is the solid they enclose");
+                        "outwards, so that the object is the solid they enclose (a room's volume)");
 }
 
 /// Unless `keep_inward_normals`, turns the given normals of `cloud` outwards when they face its
