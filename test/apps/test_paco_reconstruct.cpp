@@ -27,7 +27,6 @@
 
 #include <filesystem>
 #include <functional>
-#include <random>
 #include <regex>
 #include <string>
 #include <utility>
@@ -383,47 +382,34 @@ TEST(PacoReconstruct, AFurnishedRoomScannedFromInsideIsItsAir) {
   TempDir dir;
   paco::io::LabelledCloud scan;
   scan.has_normals = true;
-  std::mt19937 random(2);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  // Points on the rectangle corner + a u + b v (a, b in [0, 1]), about 80 per square unit, facing
-  // `normal`, except where `hidden` says the scanner did not see.
-  const auto scanRectangle = [&](const Eigen::Vector3d& corner, const Eigen::Vector3d& u, const Eigen::Vector3d& v,
-                                 const Eigen::Vector3d& normal,
-                                 const std::function<bool(const Eigen::Vector3d&)>& hidden = nullptr) {
-    const int count = static_cast<int>(80.0 * u.norm() * v.norm());
-    for (int i = 0; i < count; ++i) {
-      const Eigen::Vector3d x = corner + unit(random) * u + unit(random) * v;
-      if (hidden && hidden(x)) continue;
-      pcl::PointNormal p;
-      p.getVector3fMap() = x.cast<float>();
-      p.getNormalVector3fMap() = normal.cast<float>();
+  const double w = 6.0, d = 5.0, h = 2.7;
+  // Each solid sampled by area at about 80 points per square unit (paco::test::scanByFace), less
+  // what the scanner did not see.
+  const auto add = [&](const paco::SurfaceMesh& solid, double area, std::uint64_t seed, float facing,
+                       const std::function<bool(const Eigen::Vector3d&)>& seen) {
+    const auto part = paco::test::scanByFace(solid, static_cast<std::size_t>(80.0 * area), seed, seen);
+    for (auto p : *part.cloud) {
+      p.getNormalVector3fMap() *= facing;
       scan.points.push_back(p);
     }
   };
-  const double w = 6.0, d = 5.0, h = 2.7;
-  const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(), Z = Eigen::Vector3d::UnitZ();
   const auto under_table = [](const Eigen::Vector3d& x) {
     return x.x() > 2.4 && x.x() < 3.6 && x.y() > 2.1 && x.y() < 2.9;
   };
   const auto behind_cabinet = [](const Eigen::Vector3d& x) { return x.x() < 0.6 && x.y() > 1.5 && x.y() < 3.5; };
-  const auto door = [](const Eigen::Vector3d& x) { return x.x() > 4.0 && x.x() < 4.9 && x.z() < 2.1; };
-  scanRectangle({0, 0, 0}, w * X, d * Y, Z, [&](const Eigen::Vector3d& x) { return under_table(x) || behind_cabinet(x); });
-  scanRectangle({0, 0, h}, w * X, d * Y, -Z);
-  scanRectangle({0, 0, 0}, d * Y, h * Z, X, [&](const Eigen::Vector3d& x) { return behind_cabinet(x) && x.z() < 2.0; });
-  scanRectangle({w, 0, 0}, d * Y, h * Z, -X);
-  scanRectangle({0, 0, 0}, w * X, h * Z, Y, door);
-  scanRectangle({0, d, 0}, w * X, h * Z, -Y);
-  // The table: top and four sides.
-  scanRectangle({2.4, 2.1, 0.75}, 1.2 * X, 0.8 * Y, Z);
-  scanRectangle({2.4, 2.1, 0}, 1.2 * X, 0.75 * Z, -Y);
-  scanRectangle({2.4, 2.9, 0}, 1.2 * X, 0.75 * Z, Y);
-  scanRectangle({2.4, 2.1, 0}, 0.8 * Y, 0.75 * Z, -X);
-  scanRectangle({3.6, 2.1, 0}, 0.8 * Y, 0.75 * Z, X);
-  // The cabinet: top, front and two sides.
-  scanRectangle({0, 1.5, 2.0}, 0.6 * X, 2.0 * Y, Z);
-  scanRectangle({0.6, 1.5, 0}, 2.0 * Y, 2.0 * Z, X);
-  scanRectangle({0, 1.5, 0}, 0.6 * X, 2.0 * Z, -Y);
-  scanRectangle({0, 3.5, 0}, 0.6 * X, 2.0 * Z, Y);
+  const auto door = [](const Eigen::Vector3d& x) { return x.y() < 1e-6 && x.x() > 4.0 && x.x() < 4.9 && x.z() < 2.1; };
+  const auto on_floor = [](const Eigen::Vector3d& x) { return x.z() < 1e-6; };
+  // The room from inside: its normals face into it.
+  add(paco::test::makeBox({0, 0, 0}, {w, d, h}), 2 * (w * d + w * h + d * h), 2, -1.0f, [&](const Eigen::Vector3d& x) {
+    const bool floor_under_furniture = on_floor(x) && (under_table(x) || behind_cabinet(x));
+    const bool wall_behind_cabinet = x.x() < 1e-6 && behind_cabinet(x) && x.z() < 2.0;
+    return !floor_under_furniture && !wall_behind_cabinet && !door(x);
+  });
+  // The table (top and four sides) and the cabinet (top, front and two sides) from outside.
+  add(paco::test::makeBox({2.4, 2.1, 0}, {3.6, 2.9, 0.75}), 2 * (0.96 + 0.9 + 0.6), 3, 1.0f,
+      [&](const Eigen::Vector3d& x) { return !on_floor(x); });
+  add(paco::test::makeBox({0, 1.5, 0}, {0.6, 3.5, 2.0}), 2 * (1.2 + 1.2 + 4.0), 4, 1.0f,
+      [&](const Eigen::Vector3d& x) { return !on_floor(x) && x.x() > 1e-6; });
   paco::io::saveCloud(dir.file("furnished.pcd"), scan);
   const double air = w * d * h - 1.2 * 0.8 * 0.75 - 0.6 * 2.0 * 2.0;
   for (const std::string assembler : {"polyfit", "cell-complex"}) {
