@@ -452,12 +452,12 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
     // labels, which name the input's points), and normals that face the middle as a whole turned
     // outwards (which keeps every point). The time counts as the segmentation's.
     pcl::PointCloud<pcl::PointNormal> working;
-    const bool thinned = !options.use_dataset_labels && !reads_input_labels &&
-                         prepareScanPoints(input.input, options.max_input_points, working).changed();
-    const bool inwards = normalSides(thinned ? working : input.input).faceInwards();
-    if (thinned || inwards) {
+    const bool points_changed = !options.use_dataset_labels && !reads_input_labels &&
+                                prepareScanPoints(input.input, options.max_input_points, working).changed();
+    const bool inwards = normalSides(points_changed ? working : input.input).faceInwards();
+    if (points_changed || inwards) {
       MethodInput prepared = input;
-      if (thinned) {
+      if (points_changed) {
         prepared.input = std::move(working);
         prepared.input_labels.clear();
       }
