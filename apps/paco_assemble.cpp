@@ -118,6 +118,9 @@ int run(int argc, char** argv) {
       ("max-candidate-faces", po::value(&max_candidate_faces)->default_value(max_candidate_faces),
        "polyfit: leave out the least confident primitives (confidence < 1) until the candidate faces fit (0: no limit)")
       ("no-warm-start", "polyfit: do not start the MIP solver from the cell complex's surface (a time-out then leaves no mesh)")
+      ("keep-inward-normals", "keep normals that face the middle of the primitives' points as a whole (primitives "
+       "of a room scanned from inside); by default every plane and normal is then turned outwards, so that the mesh "
+       "is the solid they enclose (a room's volume)")
       ("verbose,v", "print the MIP solver's log");
   po::options_description hidden;
   hidden.add_options()("input", po::value(&input));
@@ -153,6 +156,7 @@ int run(int argc, char** argv) {
   });
   assembler.setVerbose(vm.count("verbose") > 0);
   assembler.setWarmStart(vm.count("no-warm-start") == 0);
+  assembler.setTurnInwardNormals(vm.count("keep-inward-normals") == 0);
 
   paco::InterruptGuard interrupt_guard;
   paco::app::StageTimer timer;
@@ -175,6 +179,11 @@ int run(int argc, char** argv) {
     std::printf("pre-processing: %zu planes merged as near-duplicates, %zu dropped (too few points, or over the "
                 "candidate-face budget)\n",
                 result.num_merged, result.num_dropped);
+  if (result.turned_inward_normals)
+    std::printf("normals: %.0f %% of the primitives' points face their middle, as in a room scanned from inside; "
+                "every plane and normal was turned outwards, so that the mesh is the solid they enclose "
+                "(--keep-inward-normals keeps them)\n",
+                100.0 * result.inward_normal_share);
   if (result.status == paco::AssemblyStatus::Interrupted) throw paco::InterruptedError(result.message);
   if (!result.ok())
     throw paco::Error("assembly failed (" + paco::toString(result.status) + "): " + result.message);

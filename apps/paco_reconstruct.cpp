@@ -145,6 +145,7 @@ int run(int argc, char** argv) {
   assembler.setTimeLimit(o.time_limit);
   assembler.setMaxCandidateFaces(o.max_candidate_faces);
   assembler.setWarmStart(!o.no_warm_start);
+  assembler.setTurnInwardNormals(!o.scan.keep_inward_normals);
   // From here on Ctrl-C stops at the next stage boundary with a message; loading the model comes first.
   paco::InterruptGuard interrupt_guard;
   paco::CompletionModel::ConstPtr model;
@@ -227,6 +228,9 @@ int run(int argc, char** argv) {
   }
   std::printf("assemble (%s): %zu faces, %zu vertices, %s\n", o.assembler.c_str(), mesh.faces.size(),
               mesh.vertices.size(), result.topology.describe().c_str());
+  if (result.turned_inward_normals)
+    std::printf("  the primitives' normals faced their middle (%.0f %%) and were turned outwards\n",
+                100.0 * result.inward_normal_share);
   if (!result.message.empty()) std::printf("  note: %s\n", result.message.c_str());
   else if (result.hit_time_limit)
     std::printf("  note: the MIP solver stopped at --time-limit %s s with its best solution so far, not proven "

@@ -5,7 +5,7 @@
 #include "app_support.h"
 #include "plane_size_options.h"
 
-#include <paco/segmentation/normal_sides.h>
+#include <paco/common/normal_sides.h>
 #include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/thinning.h>
 

@@ -14,7 +14,7 @@
 #include <paco/encoding/plane_proxy_encoder.h>
 #include <paco/io/cloud_io.h>
 #include <paco/io/mesh_io.h>
-#include <paco/segmentation/normal_sides.h>
+#include <paco/common/normal_sides.h>
 #include <paco/segmentation/planar_segmenter.h>
 
 #include <iostream>

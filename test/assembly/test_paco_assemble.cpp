@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 namespace {
@@ -61,6 +62,36 @@ TEST(PacoAssemble, AssemblesALabelledCloud) {
                                        " --backend cell-complex", &out), 0) << out;
   EXPECT_NE(out.find("7 planes used"), std::string::npos) << out;
   EXPECT_TRUE(std::filesystem::exists(dir.file("cube.off")));
+}
+
+// The L-shaped room's planes facing into the room (as a scanner inside it gives them): the tool
+// turns them, says so, and builds the room's volume; --keep-inward-normals keeps them as given.
+TEST(PacoAssemble, TurnsPrimitivesOfARoomThatFaceInwards) {
+  if (!toolBuilt()) GTEST_SKIP() << "paco_assemble is not built";
+  TempDir dir;
+  std::vector<paco::PlanarPrimitive> primitives = paco::test::primitivesOf(paco::test::makeLShapedRoom());
+  for (auto& primitive : primitives) {
+    primitive.plane = primitive.plane.flipped();
+    for (auto& p : primitive.points) p.getNormalVector3fMap() = primitive.plane.normal.cast<float>();
+  }
+  paco::io::saveVertexGroups(dir.file("room.bvg"), paco::io::toVertexGroups(primitives));
+  for (const bool keep : {false, true}) {
+    SCOPED_TRACE(keep ? "kept" : "turned");
+    const std::string mesh_path = dir.file(keep ? "kept.obj" : "turned.obj");
+    std::string out;
+    ASSERT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("room.bvg")) + " -o " + quoted(mesh_path) +
+                                         " --backend cell-complex" + (keep ? " --keep-inward-normals" : ""),
+                                     &out),
+              0)
+        << out;
+    EXPECT_EQ(out.find("turned outwards") != std::string::npos, !keep) << out;
+    const paco::SurfaceMesh mesh = paco::io::loadMesh(mesh_path);
+    const double volume_error = std::abs(paco::signedVolume(mesh) - paco::test::kLShapedRoomVolume);
+    if (keep)
+      EXPECT_GT(volume_error, 0.01 * paco::test::kLShapedRoomVolume);
+    else
+      EXPECT_LT(volume_error, 0.001 * paco::test::kLShapedRoomVolume);
+  }
 }
 
 TEST(PacoAssemble, FailsCleanlyWithoutPartialOutput) {

@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -663,9 +664,10 @@ TEST(CellComplex, ACubeWhosePointsCoverLittleOfEachFaceStillGivesTheCube) {
   EXPECT_TRUE(result.message.empty()) << result.message;
 }
 
-// The same sparse patches with their normals facing into the cube describe no solid. Weaker
-// smoothing would label the box around the cube inside (a shell reaching the box's walls); that
-// is not kept, and the assembler fails as before.
+// The same sparse patches with their normals facing into the cube, kept so, describe no solid.
+// Weaker smoothing would label the box around the cube inside (a shell reaching the box's walls);
+// that is not kept, and the assembler fails as before. (By default the assembler turns such
+// normals outwards first: see InwardNormals below.)
 TEST(CellComplex, SparsePatchesFacingInwardStillFail) {
   std::mt19937 random(5);
   const Eigen::Vector3d lo = Eigen::Vector3d::Constant(0.4), hi = Eigen::Vector3d::Constant(0.6);
@@ -676,10 +678,78 @@ TEST(CellComplex, SparsePatchesFacingInwardStillFail) {
   }
   paco::PolygonalAssembler assembler;
   assembler.setBackend(paco::AssemblyBackend::CellComplex);
+  assembler.setTurnInwardNormals(false);
   assembler.setInputPrimitives(inward);
   SurfaceMesh mesh;
   EXPECT_EQ(assembler.reconstruct(mesh).status, paco::AssemblyStatus::EmptySolution);
   EXPECT_TRUE(mesh.faces.empty());
+}
+
+// The L-shaped room's planes with their normals facing into the room, as a scanner inside it
+// gives them (and as a library user may pass them straight from PCL): the assembler turns them
+// and builds the room's volume. Kept as given, the cell complex takes the space outside the walls
+// as solid.
+std::vector<PlanarPrimitive> lShapedRoomFacingInwards() {
+  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeLShapedRoom(), 6000);
+  for (auto& primitive : primitives) {
+    primitive.plane = primitive.plane.flipped();
+    for (auto& p : primitive.points) p.getNormalVector3fMap() = primitive.plane.normal.cast<float>();
+  }
+  return primitives;
+}
+
+TEST(InwardNormals, ARoomsPlanesFacingInwardsAreTurnedAndGiveTheRoomsVolume) {
+  for (const auto backend : {paco::AssemblyBackend::CellComplex, paco::AssemblyBackend::PolyFit}) {
+    SCOPED_TRACE(paco::toString(backend));
+    paco::PolygonalAssembler assembler;
+    assembler.setBackend(backend);
+    assembler.setInputPrimitives(lShapedRoomFacingInwards());
+    SurfaceMesh mesh;
+    const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+    ASSERT_TRUE(result.ok()) << paco::toString(result.status) << ": " << result.message;
+    EXPECT_TRUE(result.turned_inward_normals);
+    EXPECT_GT(result.inward_normal_share, 0.99);
+    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+    EXPECT_EQ(paco::analyseTopology(mesh).components, 1u);
+    EXPECT_NEAR(paco::signedVolume(mesh), paco::test::kLShapedRoomVolume, 1e-3 * paco::test::kLShapedRoomVolume);
+    EXPECT_EQ(countPlanarRegions(mesh), 8u);
+    // The used primitives are the turned ones: each faces out of the room, as its face does.
+    const std::vector<paco::Plane> outward = facePlanes(paco::test::makeLShapedRoom());
+    for (const auto& used : assembler.getUsedPrimitives()) {
+      const auto same = std::find_if(outward.begin(), outward.end(), [&](const paco::Plane& plane) {
+        return plane.unorientedAngleTo(used.plane) < 1e-3 && std::abs(std::abs(plane.offset) - std::abs(used.plane.offset)) < 1e-3;
+      });
+      ASSERT_NE(same, outward.end());
+      EXPECT_GT(same->normal.dot(used.plane.normal), 0.99);
+    }
+  }
+}
+
+TEST(InwardNormals, KeptAsGivenTheCellComplexDoesNotGiveTheRoom) {
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend(paco::AssemblyBackend::CellComplex);
+  assembler.setTurnInwardNormals(false);
+  assembler.setInputPrimitives(lShapedRoomFacingInwards());
+  SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  EXPECT_FALSE(result.turned_inward_normals);
+  EXPECT_GT(result.inward_normal_share, 0.99);
+  const bool is_the_room = result.ok() && paco::analyseTopology(mesh).components == 1 &&
+                           std::abs(paco::signedVolume(mesh) - paco::test::kLShapedRoomVolume) <
+                               1e-2 * paco::test::kLShapedRoomVolume;
+  EXPECT_FALSE(is_the_room) << paco::toString(result.status) << ", volume " << paco::signedVolume(mesh);
+}
+
+TEST(InwardNormals, ASolidsPlanesFacingOutwardsAreLeftAlone) {
+  paco::PolygonalAssembler assembler;
+  assembler.setBackend(paco::AssemblyBackend::CellComplex);
+  assembler.setInputPrimitives(primitivesOf(paco::test::makeLShapedRoom(), 6000));
+  SurfaceMesh mesh;
+  const paco::AssemblyResult& result = assembler.reconstruct(mesh);
+  ASSERT_TRUE(result.ok()) << result.message;
+  EXPECT_FALSE(result.turned_inward_normals);
+  EXPECT_LT(result.inward_normal_share, 0.01);
+  EXPECT_NEAR(paco::signedVolume(mesh), paco::test::kLShapedRoomVolume, 1e-3 * paco::test::kLShapedRoomVolume);
 }
 
 // A box and a small patch of a plane that touches it only at one corner (or along one edge).

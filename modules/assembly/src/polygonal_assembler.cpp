@@ -6,6 +6,7 @@
 
 #include <paco/common/angles.h>
 #include <paco/common/error.h>
+#include <paco/common/normal_sides.h>
 #include <paco/common/normalization.h>
 #include <paco/common/progress.h>
 
@@ -341,6 +342,21 @@ void PolygonalAssembler::fail(AssemblyStatus status, const std::string& message)
   result_.message = message;
 }
 
+void PolygonalAssembler::turnInwardPrimitives(std::vector<PlanarPrimitive>& primitives) {
+  // The same rule as for a scan (paco::normalSides), read over every primitive's points with the
+  // normals the backends will read (a point without one has just taken its plane's).
+  pcl::PointCloud<pcl::PointNormal> points;
+  for (const auto& primitive : primitives) points += primitive.points;
+  const NormalSides sides = normalSides(points);
+  result_.inward_normal_share = sides.inwardShare();
+  if (!turn_inward_normals_ || !sides.faceInwards()) return;
+  for (auto& primitive : primitives) {
+    primitive.plane = primitive.plane.flipped();
+    for (auto& p : primitive.points) p.getNormalVector3fMap() = -p.getNormalVector3fMap();
+  }
+  result_.turned_inward_normals = true;
+}
+
 bool PolygonalAssembler::initCompute() {
   result_.num_input_planes = input_.size();
   if (input_.empty()) {
@@ -381,6 +397,7 @@ bool PolygonalAssembler::initCompute() {
       }
       all_points.push_back(position(p));
     }
+  turnInwardPrimitives(primitives);
   Eigen::Vector3d lo = all_points.front(), hi = all_points.front();
   for (const auto& x : all_points) {
     lo = lo.cwiseMin(x);

@@ -9,7 +9,7 @@
 #include <paco/assembly/polygonal_assembler.h>
 #endif
 #ifdef PACO_EVALUATION_WITH_SEGMENTATION
-#include <paco/segmentation/normal_sides.h>
+#include <paco/common/normal_sides.h>
 #include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/thinning.h>
 #endif

@@ -89,6 +89,11 @@ struct AssemblyResult {
   /// of percentage above the start's; the warm start's surface (the cell complex on the same
   /// planes) was returned instead, and `message` says why.
   bool returned_warm_start = false;
+  /// The primitives' normals faced the middle of their points as a whole (a room scanned from
+  /// inside, normals turned towards a viewpoint inside the object; paco::NormalSides) and every
+  /// plane and normal was turned to face out of it (setTurnInwardNormals).
+  bool turned_inward_normals = false;
+  double inward_normal_share = 0.0;    ///< paco::NormalSides::inwardShare of the primitives' points
   MeshTopology topology;               ///< of the output mesh
   double seconds = 0.0;                ///< wall time of reconstruct()
   double seconds_partition = 0.0;      ///< polyfit: candidate generation; cell-complex: partition
@@ -161,6 +166,14 @@ class PolygonalAssembler {
   void setWarmStart(bool warm_start) { warm_start_ = warm_start; }
   bool getWarmStart() const { return warm_start_; }
 
+  /// Both backends read a face's outward side from its plane's normal and its points' normals.
+  /// When those face the middle of the points as a whole (paco::NormalSides::faceInwards: a room
+  /// scanned from inside), every plane and normal is turned first, so that the mesh is the
+  /// volume the faces enclose; AssemblyResult::turned_inward_normals says so. Default true; false
+  /// keeps them as given, and the cell complex then takes the space outside the walls as solid.
+  void setTurnInwardNormals(bool turn) { turn_inward_normals_ = turn; }
+  bool getTurnInwardNormals() const { return turn_inward_normals_; }
+
   /// Print the MIP solver's own log to stdout (default false: silent).
   void setVerbose(bool verbose) { verbose_ = verbose; }
 
@@ -197,7 +210,8 @@ class PolygonalAssembler {
   const AssemblyResult& reconstruct(pcl::PolygonMesh& mesh);
   const AssemblyResult& getResult() const { return result_; }
 
-  /// The primitives after merging and dropping, in the input frame (valid after reconstruct()).
+  /// The primitives after merging and dropping, in the input frame, turned when
+  /// AssemblyResult::turned_inward_normals (valid after reconstruct()).
   const std::vector<PlanarPrimitive>& getUsedPrimitives() const { return used_; }
 
  protected:
@@ -212,6 +226,9 @@ class PolygonalAssembler {
   /// orients faces consistently and outward, merges coplanar faces per planar region, drops
   /// collinear vertices, separates sheets touching along an edge. Returns the topology.
   static MeshTopology postProcess(SurfaceMesh& mesh);
+  /// Reads which way the normals of `primitives` face (result_.inward_normal_share) and, unless
+  /// setTurnInwardNormals(false), turns every plane and normal when they face inwards as a whole.
+  void turnInwardPrimitives(std::vector<PlanarPrimitive>& primitives);
   /// Seconds left of the time budget.
   double secondsLeft() const;
   void fail(AssemblyStatus status, const std::string& message);
@@ -226,6 +243,7 @@ class PolygonalAssembler {
   std::size_t max_candidate_faces_ = kDefaultMaxCandidateFaces;
   bool verbose_ = false;
   bool warm_start_ = true;
+  bool turn_inward_normals_ = true;
   double merge_angle_;
   double merge_distance_ = 0.005;
   std::size_t min_support_ = 10;

@@ -195,7 +195,7 @@ class PlanarSegmenter : public pcl::PCLBase<PointT> {
   /// Orient estimated normals towards this viewpoint (user frame) instead of away from the
   /// bounding-box centre. Given normals are never flipped. A viewpoint inside the object (a room
   /// scanned from inside) makes the planes face into it, and the assemblers then take the room as
-  /// outside: leave it unset there, or see paco/segmentation/normal_sides.h for given normals.
+  /// outside: leave it unset there, or see paco/common/normal_sides.h for given normals.
   void setViewpoint(const Eigen::Vector3d& viewpoint) { viewpoint_ = viewpoint; }
   void clearViewpoint() { viewpoint_.reset(); }
 

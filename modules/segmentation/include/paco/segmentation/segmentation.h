@@ -7,7 +7,7 @@
 //   seg->setInputCloud(cloud); paco::PlanarSegmentation result; seg->segment(result);
 #include <paco/segmentation/efficient_ransac_segmenter.h>
 #include <paco/segmentation/gocopp_segmenter.h>
-#include <paco/segmentation/normal_sides.h>
+#include <paco/common/normal_sides.h>
 #include <paco/segmentation/planar_segmenter.h>
 #include <paco/segmentation/ransac_segmenter.h>
 #include <paco/segmentation/region_growing_segmenter.h>

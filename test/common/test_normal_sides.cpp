@@ -3,7 +3,7 @@
 // faces the middle too, but one way only, and is left alone.
 #include "shapes.h"
 
-#include <paco/segmentation/normal_sides.h>
+#include <paco/common/normal_sides.h>
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include <paco/segmentation/normal_sides.h>
+#include <paco/common/normal_sides.h>
 
 #include <pcl/common/point_tests.h>
 
