@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
     const paco::io::LabelledCloud scan = paco::io::loadCloud(argv[1]);
     auto cloud = std::make_shared<pcl::PointCloud<pcl::PointNormal>>(scan.points);
     // Normals that face the scan's middle as a whole (a room scanned from inside) turned outwards,
-    // as paco_reconstruct does: the assemblers build the solid the normals face away from.
+    // as paco_reconstruct does: the network was trained on normals facing out of the solid. (The
+    // assembler would turn such primitives itself, but the completion before it would not.)
     paco::turnInwardNormalsOutward(*cloud);
 
     // Stage 1: planar segmentation. Other backends: "region-growing", "ransac", "efficient-ransac".
