@@ -1,5 +1,7 @@
 #include "shapes.h"
 
+#include <paco/common/normal_sides.h>
+
 namespace paco::test {
 
 SurfaceMesh makePrism(const std::vector<Eigen::Vector2d>& polygon, double height) {
@@ -133,7 +135,7 @@ bool seenFromInsideTheLShapedRoom(const Eigen::Vector3d& x) {
 
 pcl::PointCloud<pcl::PointNormal>::Ptr scanLShapedRoomFromInside(std::size_t count, std::uint64_t seed) {
   const FaceLabelledScan scan = scanByFace(makeLShapedRoom(), count, seed, seenFromInsideTheLShapedRoom);
-  for (auto& p : *scan.cloud) p.getNormalVector3fMap() = -p.getNormalVector3fMap();
+  paco::flipNormals(*scan.cloud);
   return scan.cloud;
 }
 

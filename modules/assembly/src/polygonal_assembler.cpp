@@ -352,7 +352,7 @@ void PolygonalAssembler::turnInwardPrimitives(std::vector<PlanarPrimitive>& prim
   if (!turn_inward_normals_ || !sides.faceInwards()) return;
   for (auto& primitive : primitives) {
     primitive.plane = primitive.plane.flipped();
-    for (auto& p : primitive.points) p.getNormalVector3fMap() = -p.getNormalVector3fMap();
+    flipNormals(primitive.points);
   }
   result_.turned_inward_normals = true;
 }

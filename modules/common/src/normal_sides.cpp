@@ -44,10 +44,14 @@ NormalSides normalSides(const pcl::PointCloud<pcl::PointNormal>& cloud) {
   return sides;
 }
 
+void flipNormals(pcl::PointCloud<pcl::PointNormal>& cloud) {
+  for (auto& p : cloud) p.getNormalVector3fMap() = -p.getNormalVector3fMap();
+}
+
 NormalSides turnInwardNormalsOutward(pcl::PointCloud<pcl::PointNormal>& cloud) {
   NormalSides sides = normalSides(cloud);
   if (!sides.faceInwards()) return sides;
-  for (auto& p : cloud) p.getNormalVector3fMap() = -p.getNormalVector3fMap();
+  flipNormals(cloud);
   sides.turned = true;
   return sides;
 }

@@ -461,7 +461,7 @@ MethodOutput runMethod(const std::string& name, const MethodInput& input, const 
         prepared.input = std::move(working);
         prepared.input_labels.clear();
       }
-      turnInwardNormalsOutward(prepared.input);
+      if (inwards) flipNormals(prepared.input);
       const double preparation_seconds = secondsSince(start);
       out = function(prepared, options);
       out.seconds["segment"] += preparation_seconds;

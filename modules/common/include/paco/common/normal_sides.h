@@ -55,6 +55,9 @@ constexpr double kNormalSideMargin = 0.05;
 /// How the normals of `cloud` face (NormalSides). Non-finite points are ignored.
 NormalSides normalSides(const pcl::PointCloud<pcl::PointNormal>& cloud);
 
+/// Flips every normal of `cloud` (non-finite and zero ones stay so).
+void flipNormals(pcl::PointCloud<pcl::PointNormal>& cloud);
+
 /// Flips every normal of `cloud` when its normals face inwards as a whole (NormalSides::faceInwards),
 /// so that the pipeline reconstructs the solid they enclose: a room's volume, with its faces
 /// facing out of it. Returns what normalSides read, with `turned` set when it flipped.

@@ -1,6 +1,7 @@
 #pragma once
-// Everything of paco::segmentation: the PlanarSegmenter base, its four backends, the factory, the
-// thinning of dense scans and the side a scan's normals face.
+// Everything of paco::segmentation: the PlanarSegmenter base, its four backends, the factory and
+// the thinning of dense scans; also, from paco::common, the side a scan's normals face (turn a
+// scan whose normals face inwards before segmenting it).
 // Usage:
 //   #include <paco/segmentation/segmentation.h>
 //   auto seg = paco::makePlanarSegmenter<pcl::PointXYZ>("region-growing");
