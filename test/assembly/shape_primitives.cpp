@@ -172,4 +172,13 @@ std::vector<PlanarPrimitive> latticeOfCoveredPlanes(int inner, unsigned seed) {
   return primitives;
 }
 
+std::vector<PlanarPrimitive> primitivesFacingInwards(const SurfaceMesh& mesh, std::size_t samples) {
+  std::vector<PlanarPrimitive> primitives = primitivesOf(mesh, samples);
+  for (auto& primitive : primitives) {
+    primitive.plane = primitive.plane.flipped();
+    for (auto& p : primitive.points) p.getNormalVector3fMap() = primitive.plane.normal.cast<float>();
+  }
+  return primitives;
+}
+
 }  // namespace paco::test

@@ -38,5 +38,8 @@ PlanarPrimitive coveredAxisPlane(int axis, double at, double sign, const Eigen::
 /// points over the whole cube's cross-section: the floors and walls of a building, a cell complex
 /// of (inner + 1)^3 cells and more.
 std::vector<PlanarPrimitive> latticeOfCoveredPlanes(int inner, unsigned seed);
+/// primitivesOf(mesh, samples) with every plane and point normal facing into the solid, as a
+/// scanner inside a room gives them.
+std::vector<PlanarPrimitive> primitivesFacingInwards(const SurfaceMesh& mesh, std::size_t samples = 6000);
 
 }  // namespace paco::test

@@ -69,12 +69,8 @@ TEST(PacoAssemble, AssemblesALabelledCloud) {
 TEST(PacoAssemble, TurnsPrimitivesOfARoomThatFaceInwards) {
   if (!toolBuilt()) GTEST_SKIP() << "paco_assemble is not built";
   TempDir dir;
-  std::vector<paco::PlanarPrimitive> primitives = paco::test::primitivesOf(paco::test::makeLShapedRoom());
-  for (auto& primitive : primitives) {
-    primitive.plane = primitive.plane.flipped();
-    for (auto& p : primitive.points) p.getNormalVector3fMap() = primitive.plane.normal.cast<float>();
-  }
-  paco::io::saveVertexGroups(dir.file("room.bvg"), paco::io::toVertexGroups(primitives));
+  paco::io::saveVertexGroups(dir.file("room.bvg"), paco::io::toVertexGroups(
+                                                     paco::test::primitivesFacingInwards(paco::test::makeLShapedRoom())));
   for (const bool keep : {false, true}) {
     SCOPED_TRACE(keep ? "kept" : "turned");
     const std::string mesh_path = dir.file(keep ? "kept.obj" : "turned.obj");

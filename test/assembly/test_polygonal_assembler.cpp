@@ -690,12 +690,7 @@ TEST(CellComplex, SparsePatchesFacingInwardStillFail) {
 // and builds the room's volume. Kept as given, the cell complex takes the space outside the walls
 // as solid.
 std::vector<PlanarPrimitive> lShapedRoomFacingInwards() {
-  std::vector<PlanarPrimitive> primitives = primitivesOf(paco::test::makeLShapedRoom(), 6000);
-  for (auto& primitive : primitives) {
-    primitive.plane = primitive.plane.flipped();
-    for (auto& p : primitive.points) p.getNormalVector3fMap() = primitive.plane.normal.cast<float>();
-  }
-  return primitives;
+  return paco::test::primitivesFacingInwards(paco::test::makeLShapedRoom());
 }
 
 TEST(InwardNormals, ARoomsPlanesFacingInwardsAreTurnedAndGiveTheRoomsVolume) {
