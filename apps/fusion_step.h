@@ -185,8 +185,8 @@ struct ScanKnowledgeFlags {
          "fusion)")
         ("extent-head", po::value(&extent_head),
          "a hidden-extent head trained for the model (paco_train --extent-head-for), e.g. models/extent/mfcad_cube.pt for "
-         "parts cut from a cube: the hidden side is closed where it guesses the object ends (with fusion; "
-         "doc/evaluation.md)")
+         "parts cut from a cube, models/extent/mfcad_stretched.pt for other box-like objects: the hidden side is "
+         "closed where it guesses the object ends (with fusion; doc/evaluation.md, models/README.md)")
         ("seen-from", po::value(&seen_from),
          "X,Y,Z: the direction towards a distant scanner (e.g. 0,0,1 for airborne LiDAR with Z up); completed "
          "points it would have seen (off the scan's silhouette, or in front of what it saw) are dropped, and the box "
@@ -278,7 +278,7 @@ inline void guessHiddenExtent(const CompletionModel::ConstPtr& model, const Hidd
                               const PlanarSegmentation& segmentation, int turns, ScanKnowledge& knowledge,
                               StageTimer& timer) {
   timer.start("extent");
-  const HiddenExtent extent = estimateHiddenExtent(model, head, cloud, segmentation, turns);
+  const HiddenExtent extent = estimateHiddenExtent(model, head, cloud, segmentation, turns, knowledge.scanner_direction);
   timer.stop();
   knowledge.known_extent = extent.corners();
   std::printf("hidden extent (%s): the object reaches up to %.4g beyond the scan's box (%.1f %% of its diagonal)\n",

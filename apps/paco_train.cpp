@@ -86,6 +86,8 @@ int exportModel(const Options& o) {
 // again with other settings without one. A header ties the file to the network and to the samples
 // picked; then one fixed-size record per pick, in order: a byte (1: an example, 0: the sample has
 // no labelled plane), the features, the six targets. A record cut short by a kill is computed again.
+// Format 02: the features are observed in the box fill's frame (paco::closingBoxRotation); format
+// 01's were in the dominant seen planes' frame, and are refused.
 class ExtentFeatureCache {
  public:
   using Record = std::optional<paco::ExtentExample>;
@@ -130,7 +132,8 @@ class ExtentFeatureCache {
   }
 
  private:
-  static constexpr char kMagic[8] = {'P', 'A', 'C', 'O', 'X', 'F', '0', '1'};
+  static constexpr char kMagic[8] = {'P', 'A', 'C', 'O', 'X', 'F', '0', '2'};
+  static constexpr char kMagicBeforeTheFillsFrame[8] = {'P', 'A', 'C', 'O', 'X', 'F', '0', '1'};
   static constexpr std::uintmax_t kHeaderBytes = sizeof kMagic + 2 * sizeof(std::uint64_t) + sizeof(std::int32_t);
 
   std::uintmax_t recordBytes() const { return 1 + sizeof(float) * static_cast<std::uintmax_t>(width_ + paco::kBoxSides); }
@@ -153,6 +156,10 @@ class ExtentFeatureCache {
     in.read(reinterpret_cast<char*>(&fingerprint), sizeof fingerprint);
     in.read(reinterpret_cast<char*>(&picks_key), sizeof picks_key);
     in.read(reinterpret_cast<char*>(&width), sizeof width);
+    if (in && std::equal(magic, magic + sizeof magic, kMagicBeforeTheFillsFrame))
+      throw paco::InvalidInputError(what + " holds features observed in the dominant seen planes' frame, which the "
+                                           "head no longer uses (it takes the box fill's since 2026-12-07); delete it "
+                                           "or give another --feature-cache folder");
     if (!in || !std::equal(magic, magic + sizeof magic, kMagic))
       throw paco::InvalidInputError(what + " is not one (unreadable or truncated header); delete it or give another "
                                            "--feature-cache folder");

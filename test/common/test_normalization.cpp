@@ -325,6 +325,46 @@ TEST(Orientation, AChamferIsNoMirrorImageOfTheFaceItCuts) {
   EXPECT_THROW(paco::mirrorPlaneAxes({face}, {}), paco::InvalidInputError);
 }
 
+// The box fill's axes, which the hidden-extent head takes too: a gable roof's come from its mirror
+// image slopes, or from the lines of sight when the scanner's direction is known; planes with a
+// perpendicular pair keep dominantPlaneAxes' frame.
+TEST(Orientation, TheClosingBoxOfAGableRoofLiesOnItsBisectorsOrAroundTheLinesOfSight) {
+  const Eigen::Matrix3d heading = turn(30.0, Eigen::Vector3d(0, 0, 1));
+  const Eigen::Vector3d ridge = heading * Eigen::Vector3d(1, 0, 0);
+  const Eigen::Vector3d up(0, 0, 1);
+  const std::vector<Eigen::Vector3d> gable = {turn(20.0, ridge) * up, turn(-20.0, ridge) * up};
+  const std::vector<double> sizes = {2100, 2000};
+
+  const paco::ClosingBoxAxes mirrored = paco::closingBoxAxes(gable, sizes);
+  ASSERT_TRUE(mirrored.axes.has_value());
+  EXPECT_TRUE(mirrored.on_mirror_pair);
+  EXPECT_FALSE(mirrored.on_one_plane);
+  EXPECT_TRUE(hasAxis(*mirrored.axes, up) && hasAxis(*mirrored.axes, ridge)) << *mirrored.axes;
+
+  const paco::ClosingBoxAxes seen_from_above = paco::closingBoxAxes(gable, sizes, Eigen::Vector3d(0, 0, 2));
+  ASSERT_TRUE(seen_from_above.axes.has_value());
+  EXPECT_FALSE(seen_from_above.on_mirror_pair || seen_from_above.on_one_plane);
+  EXPECT_TRUE(seen_from_above.axes->col(0).isApprox(up, 1e-12)) << *seen_from_above.axes;
+
+  // A slope and a small chamfer are no mirror pair: the largest plane's frame, flagged as a guess.
+  const paco::ClosingBoxAxes one_plane = paco::closingBoxAxes({gable[0], gable[1]}, {2100, 100});
+  ASSERT_TRUE(one_plane.axes.has_value());
+  EXPECT_TRUE(one_plane.on_one_plane);
+  EXPECT_TRUE(hasAxis(*one_plane.axes, gable[0])) << *one_plane.axes;
+
+  // An end wall across the ridge is perpendicular to both slopes: dominantPlaneAxes' frame.
+  const std::vector<Eigen::Vector3d> with_wall = {gable[0], gable[1], ridge};
+  const std::vector<double> with_wall_sizes = {2100, 2000, 500};
+  const paco::ClosingBoxAxes walled = paco::closingBoxAxes(with_wall, with_wall_sizes);
+  ASSERT_TRUE(walled.axes.has_value());
+  EXPECT_FALSE(walled.on_mirror_pair || walled.on_one_plane);
+  EXPECT_TRUE(walled.axes->isApprox(*paco::dominantPlaneAxes(with_wall, with_wall_sizes), 1e-12));
+
+  EXPECT_FALSE(paco::closingBoxAxes({}, {}).axes.has_value());
+  EXPECT_THROW(paco::closingBoxAxes(gable, {1.0}), paco::InvalidInputError);
+  EXPECT_THROW(paco::closingBoxAxes(gable, sizes, Eigen::Vector3d(0, std::nan(""), 1)), paco::InvalidInputError);
+}
+
 TEST(Orientation, AroundRejectsAZeroAxisAndMismatchedLists) {
   EXPECT_THROW(paco::dominantPlaneAxesAround(Eigen::Vector3d::Zero(), {}, {}), paco::InvalidInputError);
   EXPECT_THROW(paco::dominantPlaneAxesAround(Eigen::Vector3d(0, 0, std::nan("")), {}, {}), paco::InvalidInputError);

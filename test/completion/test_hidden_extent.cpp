@@ -3,6 +3,7 @@
 #include "tiny_model_config.h"
 
 #include <paco/common/error.h>
+#include <paco/common/orientation.h>
 #include <paco/completion/checkpoint.h>
 #include <paco/completion/hidden_extent.h>
 #include <paco/completion/turn_ensemble.h>
@@ -147,6 +148,14 @@ TEST(HiddenExtentHead, LoadSaysWhatIsWrongWithABadFile) {
   expectModelError(dir.file("network.pt"), "not a hidden-extent head");
 }
 
+// A tiny untrained network, saved and loaded as a user's model file is.
+CompletionModel::ConstPtr tinyModel(const test::TempDir& dir, int seed) {
+  torch::manual_seed(seed);
+  PacoNetwork net(test::tinyModelConfig());
+  saveCheckpoint(dir.file("tiny.pt"), net);
+  return CompletionModel::load(dir.file("tiny.pt"));
+}
+
 // A 4 x 2 x 1 box whose scan stops at x = 12: the part from 12 to 14 was never seen.
 struct CutBoxScan {
   pcl::PointCloud<pcl::PointNormal>::Ptr cloud;
@@ -161,11 +170,8 @@ struct CutBoxScan {
 };
 
 TEST(HiddenExtentWithModel, AHeadFitToAScanGrowsItsBoxBackToTheWholeObject) {
-  torch::manual_seed(2);
   test::TempDir dir;
-  PacoNetwork net(test::tinyModelConfig());
-  saveCheckpoint(dir.file("tiny.pt"), net);
-  const auto model = CompletionModel::load(dir.file("tiny.pt"));
+  const auto model = tinyModel(dir, 2);
   const CutBoxScan scan;
 
   const ExtentObservation observation = observeExtent(model, scan.cloud, scan.segmentation);
@@ -221,6 +227,88 @@ TEST(HiddenExtentWithModel, AHeadFitToAScanGrowsItsBoxBackToTheWholeObject) {
   const auto other_model = CompletionModel::load(dir.file("other.pt"));
   EXPECT_NE(networkFingerprint(*other_model), networkFingerprint(*model));
   EXPECT_THROW(estimateHiddenExtent(other_model, *head, scan.cloud, scan.segmentation), ModelError);
+}
+
+// The roof of a gable house, 4 wide and 6 long, ridge 3 high and eaves 2 high, turned 30 degrees
+// about the vertical: only its two slopes are seen, and no two seen planes are perpendicular.
+test::FaceLabelledScan gableRoofScan() {
+  SurfaceMesh house = test::makePrism({{0, 0}, {4, 0}, {4, 2}, {2, 3}, {0, 2}}, 6.0);
+  Eigen::Matrix3d upright;
+  upright << 1, 0, 0, 0, 0, -1, 0, 1, 0;  // x stays, the profile's y goes up, the ridge runs along -y
+  const Eigen::Matrix3d placement = Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitZ()).toRotationMatrix() * upright;
+  const Eigen::Vector3d offset(5, -2, 1);
+  test::transformMesh(house, placement, offset);
+  return test::scanByFace(house, 4096, 11, [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d q = placement.transpose() * (p - offset);
+    return q.y() > 2.001 && q.z() > 0.001 && q.z() < 5.999;  // the slopes, not the gable ends
+  });
+}
+
+// The head's box must be the box fill's: the fill takes the corners of the head's grown box as
+// its known extent, and corners of a box in another frame widen the fill's box on every side. A
+// gable roof's fill box lies on the bisectors of its slopes (or around the lines of sight when the
+// scanner's direction is known); with nothing guessed beyond the scan, the head's corners must
+// then lie on the fill's box of the scan.
+TEST(HiddenExtentWithModel, TheHeadsBoxIsTheBoxFillsBox) {
+  test::TempDir dir;
+  const auto model = tinyModel(dir, 2);
+  const test::FaceLabelledScan scan = gableRoofScan();
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<double> sizes;
+  std::vector<std::size_t> counts(scan.segmentation.planes.size(), 0);
+  for (int label : scan.segmentation.labels)
+    if (label >= 0) ++counts[static_cast<std::size_t>(label)];
+  for (std::size_t i = 0; i < counts.size(); ++i)
+    if (counts[i] > 0) {
+      normals.push_back(scan.segmentation.planes[i].normal);
+      sizes.push_back(static_cast<double>(counts[i]));
+    }
+  ASSERT_EQ(normals.size(), 2u);
+
+  for (const Eigen::Vector3d& scanner : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1)}) {
+    SCOPED_TRACE(scanner.transpose());
+    const ClosingBoxAxes fill = closingBoxAxes(normals, sizes, scanner);
+    ASSERT_TRUE(fill.axes.has_value());
+    EXPECT_EQ(fill.on_mirror_pair, scanner.squaredNorm() == 0.0);
+    // The fill's box is level: the vertical is one of its axes.
+    EXPECT_NEAR((fill.axes->transpose() * Eigen::Vector3d::UnitZ()).cwiseAbs().maxCoeff(), 1.0, 1e-6);
+
+    const ExtentObservation observation =
+        observeExtent(model, scan.cloud, scan.segmentation, Eigen::Matrix3d::Identity(), scanner);
+    HiddenExtent nothing_beyond;
+    nothing_beyond.frame = observation.frame;
+    nothing_beyond.seen_box = observation.seen_box;
+    Eigen::AlignedBox3d fill_box, corner_box;
+    for (const auto& p : *scan.cloud) fill_box.extend(fill.axes->transpose() * p.getVector3fMap().cast<double>());
+    for (const auto& c : nothing_beyond.corners()) corner_box.extend(fill.axes->transpose() * c);
+    EXPECT_TRUE(corner_box.min().isApprox(fill_box.min(), 1e-5)) << corner_box.min().transpose() << " against "
+                                                                  << fill_box.min().transpose();
+    EXPECT_TRUE(corner_box.max().isApprox(fill_box.max(), 1e-5)) << corner_box.max().transpose() << " against "
+                                                                  << fill_box.max().transpose();
+  }
+  // The dominant seen planes alone (the head's frame before) put the box on one slope.
+  const Eigen::Matrix3d on_a_slope = seenPlanesRotation(scan.segmentation);
+  EXPECT_GT((on_a_slope * Eigen::Vector3d::UnitZ()).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT((on_a_slope * Eigen::Vector3d::UnitZ()).cwiseAbs().maxCoeff(), 0.99);
+}
+
+// Every head shipped in models/extent was trained for the shipped network: retraining the network
+// without training its heads again would make the tools refuse them.
+TEST(HiddenExtentHead, EveryShippedHeadFitsTheShippedModel) {
+  const std::filesystem::path models = std::filesystem::path(PACO_SOURCE_DIR) / "models";
+  if (!std::filesystem::exists(models / "paco_cpu.pt")) GTEST_SKIP() << "no shipped model in " << models;
+  const auto model = CompletionModel::load((models / "paco_cpu.pt").string());
+  std::vector<std::string> heads;
+  for (const auto& entry : std::filesystem::directory_iterator(models / "extent"))
+    if (entry.path().extension() == ".pt") heads.push_back(entry.path().filename().string());
+  std::sort(heads.begin(), heads.end());
+  EXPECT_EQ(heads, (std::vector<std::string>{"mfcad_cube.pt", "mfcad_stretched.pt"}));
+  for (const std::string& name : heads) {
+    SCOPED_TRACE(name);
+    const auto head = HiddenExtentModel::load((models / "extent" / name).string());
+    EXPECT_NO_THROW(head->checkMatches(*model));
+    EXPECT_EQ(head->featureWidth(), model->config().global_width + 3);
+  }
 }
 
 }  // namespace

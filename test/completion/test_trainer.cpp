@@ -522,6 +522,15 @@ TEST(PacoTrainTool, TrainsOneEpochResumesAndRefusesToOverwrite) {
             0);
   EXPECT_NE(output.find("another network"), std::string::npos) << output;
   EXPECT_FALSE(std::filesystem::exists(dir.file("h3.pt")));
+  // A cache of the first format holds features observed in another frame: refused too.
+  {
+    std::fstream header(train_cache, std::ios::in | std::ios::out | std::ios::binary);
+    header.seekp(7);
+    header.put('1');
+  }
+  EXPECT_NE(paco::test::runCommand(cached + dir.file("h4.pt"), &output), 0);
+  EXPECT_NE(output.find("dominant seen planes' frame"), std::string::npos) << output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("h4.pt")));
   // --init-from: a new run from the exported weights; not together with --resume.
   const std::string init_base = tool + " " + dir.file("data") + " -o " + dir.file("run2") +
                                 " --batch 2 --threads 1 --input-points 256 --gt-points 512 --quiet --init-from ";

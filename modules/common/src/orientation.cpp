@@ -248,6 +248,30 @@ Eigen::Matrix3d rotationOntoAxesClosestToIdentity(const Eigen::Matrix3d& axes) {
   return best;
 }
 
+ClosingBoxAxes closingBoxAxes(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
+                              const Eigen::Vector3d& scanner_direction) {
+  checkSameLength("closingBoxAxes", normals, weights);
+  if (!scanner_direction.allFinite())
+    throw InvalidInputError("closingBoxAxes: the scanner's direction must be finite (zero when unknown)");
+  ClosingBoxAxes result;
+  if (scanner_direction.squaredNorm() > 0.0) {
+    result.axes = dominantPlaneAxesAround(scanner_direction, normals, weights);
+    return result;
+  }
+  result.axes = dominantPlaneAxes(normals, weights);
+  // Parallel planes only (a plate seen on both sides, a flat roof) leave no doubt about the box's
+  // first axis; planes at an angle without a perpendicular pair do (a gable roof).
+  if (result.axes && !hasPerpendicularPlanes(normals, weights) && hasPlanesAtAnAngle(normals, weights)) {
+    if (const auto mirrored = mirrorPlaneAxes(normals, weights)) {
+      result.axes = mirrored;
+      result.on_mirror_pair = true;
+    } else {
+      result.on_one_plane = true;
+    }
+  }
+  return result;
+}
+
 Eigen::Matrix3d seenPlanesRotation(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights) {
   const auto axes = dominantPlaneAxes(normals, weights);
   return axes ? rotationOntoAxesClosestToIdentity(*axes) : Eigen::Matrix3d::Identity();

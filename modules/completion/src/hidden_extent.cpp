@@ -172,18 +172,37 @@ std::uint64_t networkFingerprint(const CompletionModel& model) {
   return hash;
 }
 
+Eigen::Matrix3d closingBoxRotation(const PlanarSegmentation& segmentation, const Eigen::Vector3d& scanner_direction,
+                                   std::size_t min_points) {
+  std::vector<std::size_t> sizes(segmentation.planes.size(), 0);
+  for (int label : segmentation.labels)
+    if (label >= 0 && static_cast<std::size_t>(label) < sizes.size()) ++sizes[static_cast<std::size_t>(label)];
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<double> weights;
+  for (std::size_t i = 0; i < sizes.size(); ++i) {
+    const Eigen::Vector3d& normal = segmentation.planes[i].normal;
+    if (sizes[i] < min_points || !(normal.norm() > 0.0)) continue;
+    normals.push_back(normal.normalized());
+    weights.push_back(static_cast<double>(sizes[i]));
+  }
+  const ClosingBoxAxes axes = closingBoxAxes(normals, weights, scanner_direction);
+  return axes.axes ? rotationOntoAxesClosestToIdentity(*axes.axes) : Eigen::Matrix3d::Identity();
+}
+
 ExtentObservation observeExtent(const CompletionModel::ConstPtr& model,
                                 const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                                const PlanarSegmentation& segmentation, const Eigen::Matrix3d& turn) {
+                                const PlanarSegmentation& segmentation, const Eigen::Matrix3d& turn,
+                                const Eigen::Vector3d& scanner_direction) {
   if (!model) throw ModelError("observeExtent: no completion model");
   PlaneProxyEncoder encoder;
   encoder.setModel(model);
   encoder.setInputCloud(cloud);
   encoder.setSegmentation(segmentation);
-  // The dominant seen planes onto the axes, as the box fill takes its box. A model trained on
-  // turned inputs turns them itself.
-  encoder.setTurn(model->config().input_orientation == "seen-planes" ? turn
-                                                                     : Eigen::Matrix3d(turn * seenPlanesRotation(segmentation)));
+  // The box fill's axes onto the coordinate axes, so that the head's box is the fill's. A model
+  // trained on turned inputs turns them itself.
+  encoder.setTurn(model->config().input_orientation == "seen-planes"
+                      ? turn
+                      : Eigen::Matrix3d(turn * closingBoxRotation(segmentation, scanner_direction)));
   PlaneProxies proxies;
   encoder.encode(proxies);
   const PlaneProxyOutput in = detail::decoderInputOf(proxies);
@@ -243,14 +262,15 @@ double HiddenExtent::largestInUserUnits() const {
 
 HiddenExtent estimateHiddenExtent(const CompletionModel::ConstPtr& model, const HiddenExtentModel& head,
                                   const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                                  const PlanarSegmentation& segmentation, int turns) {
+                                  const PlanarSegmentation& segmentation, int turns,
+                                  const Eigen::Vector3d& scanner_direction) {
   if (!model) throw ModelError("estimateHiddenExtent: no completion model");
   head.checkMatches(*model);
   const std::vector<Eigen::Matrix3d> all_turns = ensembleTurns(turns);
   HiddenExtent extent;
   for (std::size_t t = 0; t < all_turns.size(); ++t) {
     const Eigen::Matrix3d& turn = all_turns[t];
-    const ExtentObservation observation = observeExtent(model, cloud, segmentation, turn);
+    const ExtentObservation observation = observeExtent(model, cloud, segmentation, turn, scanner_direction);
     if (t == 0) {  // the identity: the unturned frame
       extent.frame = observation.frame;
       extent.seen_box = observation.seen_box;

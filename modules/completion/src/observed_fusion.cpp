@@ -92,22 +92,10 @@ SeenNormals seenNormals(const std::vector<PlanarPrimitive>& observed, std::size_
     seen.normals.push_back(segment.plane.normal.normalized());
     seen.sizes.push_back(static_cast<double>(segment.points.size()));
   }
-  if (scanner_direction.squaredNorm() > 0.0)
-    seen.axes = dominantPlaneAxesAround(scanner_direction, seen.normals, seen.sizes);
-  else {
-    seen.axes = dominantPlaneAxes(seen.normals, seen.sizes);
-    // Parallel planes only (a plate seen on both sides, a flat roof) leave no doubt about the
-    // box's first axis; planes at an angle without a perpendicular pair do (a gable roof).
-    if (seen.axes && !hasPerpendicularPlanes(seen.normals, seen.sizes) &&
-        hasPlanesAtAnAngle(seen.normals, seen.sizes)) {
-      if (const auto mirrored = mirrorPlaneAxes(seen.normals, seen.sizes)) {
-        seen.axes = mirrored;
-        seen.axes_on_mirror_pair = true;
-      } else {
-        seen.axes_on_one_plane = true;
-      }
-    }
-  }
+  const ClosingBoxAxes axes = closingBoxAxes(seen.normals, seen.sizes, scanner_direction);
+  seen.axes = axes.axes;
+  seen.axes_on_mirror_pair = axes.on_mirror_pair;
+  seen.axes_on_one_plane = axes.on_one_plane;
   return seen;
 }
 

@@ -71,6 +71,24 @@ std::optional<Eigen::Matrix3d> mirrorPlaneAxes(const std::vector<Eigen::Vector3d
 Eigen::Matrix3d dominantPlaneAxesAround(const Eigen::Vector3d& axis, const std::vector<Eigen::Vector3d>& normals,
                                         const std::vector<double>& weights, double tolerance_degrees = 10.0);
 
+/// The axes of the box that closes a scan's hidden side, and how they were found.
+struct ClosingBoxAxes {
+  std::optional<Eigen::Matrix3d> axes;  ///< empty when no plane counts
+  /// No scanner direction, planes at an angle but none perpendicular: the axes are a guess, from
+  /// mirror-image planes (a roof's slopes) or else from the largest plane.
+  bool on_mirror_pair = false;
+  bool on_one_plane = false;
+};
+
+/// The box fill's axes for seen planes (ObservedFusion; the hidden-extent head takes the same, so
+/// that its box and the fill's are one box). With a distant scanner's direction (non-zero),
+/// dominantPlaneAxesAround it: the box's walls run along the lines of sight. Otherwise
+/// dominantPlaneAxes, except when planes meet at an angle and no two are perpendicular (a gable
+/// roof): then mirrorPlaneAxes when it finds a frame, the largest plane's frame when not. Throws
+/// InvalidInputError when the lists differ in length or the direction is not finite.
+ClosingBoxAxes closingBoxAxes(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights,
+                              const Eigen::Vector3d& scanner_direction = Eigen::Vector3d::Zero());
+
 /// Of the 24 rotations that take the columns of `axes` (a proper rotation) onto the coordinate
 /// axes, up to order and sign, the one closest to the identity (largest trace): a scan whose
 /// dominant faces are already axis-aligned is left as it is.
@@ -81,7 +99,8 @@ Eigen::Matrix3d rotationOntoAxesClosestToIdentity(const Eigen::Matrix3d& axes);
 Eigen::Matrix3d seenPlanesRotation(const std::vector<Eigen::Vector3d>& normals, const std::vector<double>& weights);
 
 /// The same for a segmentation: each segment's plane normal weighted by its number of points (the
-/// turn PlaneProxyEncoder gives a "seen-planes" model, and the hidden-extent head's frame).
+/// turn PlaneProxyEncoder gives a "seen-planes" model; the hidden-extent head takes the box fill's
+/// axes instead, paco::closingBoxRotation).
 Eigen::Matrix3d seenPlanesRotation(const PlanarSegmentation& segmentation);
 
 }  // namespace paco

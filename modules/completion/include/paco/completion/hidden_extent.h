@@ -13,6 +13,7 @@
 // of the general model (doc/evaluation.md, "A guessed extent"; training: doc/training.md).
 #include <paco/common/normalization.h>
 #include <paco/common/primitive.h>
+#include <paco/completion/observed_fusion.h>
 #include <paco/encoding/completion_model.h>
 
 #include <Eigen/Core>
@@ -87,13 +88,25 @@ class HiddenExtentModel {
 /// valid only for the network it was trained on.
 std::uint64_t networkFingerprint(const CompletionModel& model);
 
-/// Runs the model's network once on the cloud turned onto its dominant seen planes (as the box
-/// fill takes its box), then by `turn` (an axis-preserving rotation, paco::ensembleTurns), and
-/// returns what the head sees. Throws as PlaneProxyEncoder::encode does.
+/// The rotation that puts the box fill's axes onto the coordinate axes
+/// (rotationOntoAxesClosestToIdentity of paco::closingBoxAxes over the segments of at least
+/// `min_points` points, each weighted by its number of points, as fuseWithObserved trusts them;
+/// the identity when none counts). The head's box is then the fill's box: in another frame, the
+/// corners of its grown box widen the fill's box on every side (a gable roof's box, on one slope
+/// here and on the bisectors in the fill, grew from 38 x 24 m to 49 x 42 m).
+Eigen::Matrix3d closingBoxRotation(const PlanarSegmentation& segmentation,
+                                   const Eigen::Vector3d& scanner_direction = Eigen::Vector3d::Zero(),
+                                   std::size_t min_points = ObservedFusionOptions().min_observed_points);
+
+/// Runs the model's network once on the cloud turned onto the box fill's axes
+/// (closingBoxRotation; `scanner_direction` as ObservedFusionOptions takes it, zero when unknown),
+/// then by `turn` (an axis-preserving rotation, paco::ensembleTurns), and returns what the head
+/// sees. Throws as PlaneProxyEncoder::encode does.
 ExtentObservation observeExtent(const CompletionModel::ConstPtr& model,
                                 const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
                                 const PlanarSegmentation& segmentation,
-                                const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity());
+                                const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity(),
+                                const Eigen::Vector3d& scanner_direction = Eigen::Vector3d::Zero());
 
 /// How far `complete` (points of the whole object, user frame) reaches beyond each side of the
 /// observation's box, in the head's frame units, 0 where it does not: the training target.
@@ -107,7 +120,8 @@ std::array<float, kBoxSides> extentBeyond(const ExtentObservation& observation,
 /// 1..24.
 HiddenExtent estimateHiddenExtent(const CompletionModel::ConstPtr& model, const HiddenExtentModel& head,
                                   const pcl::PointCloud<pcl::PointNormal>::ConstPtr& cloud,
-                                  const PlanarSegmentation& segmentation, int turns = 4);
+                                  const PlanarSegmentation& segmentation, int turns = 4,
+                                  const Eigen::Vector3d& scanner_direction = Eigen::Vector3d::Zero());
 
 /// One training example: an observation's features and its target.
 struct ExtentExample {
