@@ -33,8 +33,8 @@ namespace paco {
 /// Sides of a box in the order the head predicts them: -x, -y, -z, +x, +y, +z.
 constexpr int kBoxSides = 6;
 
-/// What the head sees of one scan: the network's global feature for the scan turned onto its
-/// dominant seen planes, and the shape of the scan's box there.
+/// What the head sees of one scan: the network's global feature for the scan turned onto the box
+/// fill's axes (closingBoxRotation), and the shape of the scan's box there.
 struct ExtentObservation {
   std::vector<float> features;  ///< the decoder's global feature, then the box's three side lengths
   Normalization frame;          ///< user frame -> the turned, unit-diagonal frame the head works in
