@@ -20,6 +20,10 @@ TEST(PlanarSegmentation, SegmentsAndLabelsAgree) {
   EXPECT_EQ(seg.segments[0].indices, (std::vector<int>{0, 1}));
   EXPECT_EQ(seg.segments[1].indices, (std::vector<int>{2, 4}));
   EXPECT_DOUBLE_EQ(seg.coverage(), 0.8);
+  EXPECT_EQ(seg.pointsPerSegment(), (std::vector<std::size_t>{2, 2}));
+  auto stray = seg;
+  stray.labels.push_back(7);  // a label without a plane is not counted
+  EXPECT_EQ(stray.pointsPerSegment(), (std::vector<std::size_t>{2, 2}));
   EXPECT_NO_THROW(seg.validate(5));
   EXPECT_THROW(seg.validate(6), paco::InvalidInputError);
   auto copy = seg;

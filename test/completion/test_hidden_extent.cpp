@@ -255,9 +255,7 @@ TEST(HiddenExtentWithModel, TheHeadsBoxIsTheBoxFillsBox) {
   const test::FaceLabelledScan scan = gableRoofScan();
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> sizes;
-  std::vector<std::size_t> counts(scan.segmentation.planes.size(), 0);
-  for (int label : scan.segmentation.labels)
-    if (label >= 0) ++counts[static_cast<std::size_t>(label)];
+  const std::vector<std::size_t> counts = scan.segmentation.pointsPerSegment();
   for (std::size_t i = 0; i < counts.size(); ++i)
     if (counts[i] > 0) {
       normals.push_back(scan.segmentation.planes[i].normal);

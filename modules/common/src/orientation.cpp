@@ -278,9 +278,8 @@ Eigen::Matrix3d seenPlanesRotation(const std::vector<Eigen::Vector3d>& normals, 
 }
 
 Eigen::Matrix3d seenPlanesRotation(const PlanarSegmentation& segmentation) {
-  std::vector<double> sizes(segmentation.planes.size(), 0.0);
-  for (int label : segmentation.labels)
-    if (label >= 0 && static_cast<std::size_t>(label) < sizes.size()) sizes[static_cast<std::size_t>(label)] += 1.0;
+  const std::vector<std::size_t> counts = segmentation.pointsPerSegment();
+  const std::vector<double> sizes(counts.begin(), counts.end());
   std::vector<Eigen::Vector3d> normals;
   for (const auto& plane : segmentation.planes) normals.push_back(plane.normal);
   return seenPlanesRotation(normals, sizes);

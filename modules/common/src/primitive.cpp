@@ -15,6 +15,13 @@ double PlanarSegmentation::coverage() const {
   return static_cast<double>(assigned) / static_cast<double>(labels.size());
 }
 
+std::vector<std::size_t> PlanarSegmentation::pointsPerSegment() const {
+  std::vector<std::size_t> counts(planes.size(), 0);
+  for (int label : labels)
+    if (label >= 0 && static_cast<std::size_t>(label) < counts.size()) ++counts[static_cast<std::size_t>(label)];
+  return counts;
+}
+
 void PlanarSegmentation::rebuildSegmentsFromLabels() {
   segments.assign(planes.size(), pcl::PointIndices());
   for (std::size_t i = 0; i < labels.size(); ++i) {

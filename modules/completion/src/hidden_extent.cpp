@@ -174,9 +174,7 @@ std::uint64_t networkFingerprint(const CompletionModel& model) {
 
 Eigen::Matrix3d closingBoxRotation(const PlanarSegmentation& segmentation, const Eigen::Vector3d& scanner_direction,
                                    std::size_t min_points) {
-  std::vector<std::size_t> sizes(segmentation.planes.size(), 0);
-  for (int label : segmentation.labels)
-    if (label >= 0 && static_cast<std::size_t>(label) < sizes.size()) ++sizes[static_cast<std::size_t>(label)];
+  const std::vector<std::size_t> sizes = segmentation.pointsPerSegment();
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> weights;
   for (std::size_t i = 0; i < sizes.size(); ++i) {

@@ -37,6 +37,9 @@ struct PlanarSegmentation {
   bool empty() const { return planes.empty(); }
   /// Fraction of the N points that belong to a segment (0 for an empty cloud).
   double coverage() const;
+  /// The number of points labelled with each segment (one entry per plane; labels out of range
+  /// are ignored).
+  std::vector<std::size_t> pointsPerSegment() const;
   /// Rebuilds `segments` from `labels` (labels must be -1 or < planes.size()).
   void rebuildSegmentsFromLabels();
   /// Rebuilds `labels` for `num_points` points from `segments`.
