@@ -281,9 +281,11 @@ inline void guessHiddenExtent(const CompletionModel::ConstPtr& model, const Hidd
   const HiddenExtent extent = estimateHiddenExtent(model, head, cloud, segmentation, turns, knowledge.scanner_direction);
   timer.stop();
   knowledge.known_extent = extent.corners();
-  std::printf("hidden extent (%s): the object reaches up to %.4g beyond the scan's box (%.1f %% of its diagonal)\n",
+  const auto closed = std::count(extent.closed_by_seen_face.begin(), extent.closed_by_seen_face.end(), true);
+  std::printf("hidden extent (%s): the object reaches up to %.4g beyond the scan's box (%.1f %% of its diagonal); "
+              "%d of its 6 sides end at a seen face\n",
               head.path().c_str(), extent.largestInUserUnits(),
-              100.0 * *std::max_element(extent.beyond.begin(), extent.beyond.end()));
+              100.0 * *std::max_element(extent.beyond.begin(), extent.beyond.end()), static_cast<int>(closed));
 }
 
 /// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`; the box

@@ -498,6 +498,8 @@ TEST(PacoReconstruct, AnExtentHeadClosesTheHiddenSideWhereItGuesses) {
   ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("guessed.obj")), &log), 0) << log;
   EXPECT_NE(log.find("box fill to the guessed extent"), std::string::npos) << log;
   EXPECT_NE(log.find("hidden extent ("), std::string::npos) << log;
+  // All but the cut side (+x) are seen faces of the box: the head must not grow them.
+  EXPECT_NE(log.find("5 of its 6 sides end at a seen face"), std::string::npos) << log;
   const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("guessed.obj"));
   EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
   Eigen::Vector3d lo, hi;

@@ -52,6 +52,65 @@ TEST(HiddenExtent, CornersAreTheGrownBoxInTheUsersFrame) {
   EXPECT_NEAR(user.max().z(), 3 + 0.25, 1e-12);
 }
 
+// A guess of 0.1 on every side of the scan's box, in the scan's own frame, then closeSidesOnSeenFaces.
+HiddenExtent guessedEverywhereThenClosed(const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                         const PlanarSegmentation& segmentation, std::size_t min_points = 10) {
+  HiddenExtent extent;
+  extent.frame = Normalization::fromBoundingBox(cloud);
+  for (const auto& p : cloud) extent.seen_box.extend(extent.frame.apply(p.getVector3fMap().cast<double>()));
+  extent.beyond.fill(0.1);
+  closeSidesOnSeenFaces(extent, cloud, segmentation, 0.02, min_points);
+  return extent;
+}
+
+// A 4 x 2 x 1 box scanned up to x = 3: every side but +x is a seen face of it. The +x side of the
+// scan's box is reached by the edges of the faces across it, which a cut leaves as well.
+TEST(HiddenExtent, SidesOnWhichASeenFaceLiesFacingOutAreClosed) {
+  const test::FaceLabelledScan scan = test::scanByFace(test::makeBox({0, 0, 0}, {4, 2, 1}), 4096, 5,
+                                                       [](const Eigen::Vector3d& p) { return p.x() <= 3.0; });
+  const auto guessed = [&](const PlanarSegmentation& segmentation, std::size_t min_points = 10) {
+    return guessedEverywhereThenClosed(*scan.cloud, segmentation, min_points);
+  };
+  const HiddenExtent extent = guessed(scan.segmentation);
+  EXPECT_EQ(extent.closed_by_seen_face, (std::array<bool, kBoxSides>{true, true, true, false, true, true}));
+  EXPECT_EQ(extent.beyond, (std::array<double, kBoxSides>{0, 0, 0, 0.1, 0, 0}));
+
+  // A top whose plane faces into the object, or with fewer points than a trusted face, does not
+  // close its side.
+  const std::vector<std::size_t> counts = scan.segmentation.pointsPerSegment();
+  std::size_t top = counts.size();
+  for (std::size_t i = 0; i < counts.size(); ++i)
+    if (scan.segmentation.planes[i].normal.z() > 0.99) top = i;
+  ASSERT_LT(top, counts.size());
+  PlanarSegmentation inward = scan.segmentation;
+  inward.planes[top].normal = -inward.planes[top].normal;
+  inward.planes[top].offset = -inward.planes[top].offset;
+  EXPECT_FALSE(guessed(inward).closed_by_seen_face[5]);
+  EXPECT_NEAR(guessed(inward).beyond[5], 0.1, 1e-12);
+  EXPECT_FALSE(guessed(scan.segmentation, counts[top] + 1).closed_by_seen_face[5]);
+
+  // A face facing up inside the walls of a box whose top was cut away (a shelf at z = 0.5, 0.1 of
+  // the diagonal below the walls' upper edges) does not close the top either: it is not the
+  // object's end.
+  test::FaceLabelledScan shelf = test::scanByFace(test::makeBox({0, 0, 0}, {4, 2, 1}), 4096, 5,
+                                                  [](const Eigen::Vector3d& p) { return p.z() <= 0.95; });
+  pcl::PointIndices shelf_points;
+  for (int i = 0; i < 200; ++i) {
+    pcl::PointNormal p;
+    p.x = 1.0f + 0.01f * static_cast<float>(i), p.y = 1.0f, p.z = 0.5f;
+    p.normal_x = 0.0f, p.normal_y = 0.0f, p.normal_z = 1.0f;
+    shelf_points.indices.push_back(static_cast<int>(shelf.cloud->size()));
+    shelf.cloud->push_back(p);
+    shelf.segmentation.labels.push_back(static_cast<int>(shelf.segmentation.planes.size()));
+  }
+  shelf.segmentation.planes.push_back(Plane(Eigen::Vector3d::UnitZ(), -0.5));
+  shelf.segmentation.segments.push_back(shelf_points);
+  shelf.segmentation.validate(shelf.cloud->size());
+  const HiddenExtent open_top = guessedEverywhereThenClosed(*shelf.cloud, shelf.segmentation);
+  EXPECT_EQ(open_top.closed_by_seen_face, (std::array<bool, kBoxSides>{true, true, true, true, true, false}));
+  EXPECT_NEAR(open_top.beyond[5], 0.1, 1e-12);
+}
+
 // Examples whose +x side reaches 0.3 beyond the seen box exactly when their first feature is
 // positive: a head must read it off the features.
 std::vector<ExtentExample> signExamples(int count, unsigned seed) {

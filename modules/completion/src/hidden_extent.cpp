@@ -285,7 +285,37 @@ HiddenExtent estimateHiddenExtent(const CompletionModel::ConstPtr& model, const 
     }
   }
   for (double& b : extent.beyond) b /= static_cast<double>(all_turns.size());
+  closeSidesOnSeenFaces(extent, *cloud, segmentation);
   return extent;
+}
+
+void closeSidesOnSeenFaces(HiddenExtent& extent, const pcl::PointCloud<pcl::PointNormal>& cloud,
+                           const PlanarSegmentation& segmentation, double reach, std::size_t min_points) {
+  if (extent.seen_box.isEmpty()) return;
+  const double min_cosine = std::cos(20.0 * M_PI / 180.0);
+  const std::vector<std::size_t> sizes = segmentation.pointsPerSegment();
+  for (std::size_t i = 0; i < sizes.size() && i < segmentation.segments.size(); ++i) {
+    const Eigen::Vector3d& normal = segmentation.planes[i].normal;
+    if (sizes[i] < min_points || !(normal.norm() > 0.0)) continue;
+    const Eigen::Vector3d n = extent.frame.applyToDirection(normal.normalized());
+    for (int side = 0; side < kBoxSides; ++side) {
+      const int axis = side % 3;
+      const bool at_max = side >= 3;
+      if ((at_max ? n[axis] : -n[axis]) < min_cosine || extent.closed_by_seen_face[static_cast<std::size_t>(side)])
+        continue;
+      const double level = at_max ? extent.seen_box.max()[axis] : extent.seen_box.min()[axis];
+      for (const int index : segmentation.segments[i].indices) {
+        if (index < 0 || static_cast<std::size_t>(index) >= cloud.size()) continue;
+        const Eigen::Vector3d p = extent.frame.apply(cloud[static_cast<std::size_t>(index)].getVector3fMap().cast<double>());
+        if (std::abs(p[axis] - level) <= reach) {
+          extent.closed_by_seen_face[static_cast<std::size_t>(side)] = true;
+          break;
+        }
+      }
+    }
+  }
+  for (int side = 0; side < kBoxSides; ++side)
+    if (extent.closed_by_seen_face[static_cast<std::size_t>(side)]) extent.beyond[static_cast<std::size_t>(side)] = 0.0;
 }
 
 HiddenExtentModel::ConstPtr trainHiddenExtentModel(std::uint64_t network_fingerprint,
