@@ -293,10 +293,9 @@ void closeSidesOnSeenFaces(HiddenExtent& extent, const pcl::PointCloud<pcl::Poin
                            const PlanarSegmentation& segmentation, double reach, std::size_t min_points) {
   if (extent.seen_box.isEmpty()) return;
   const double min_cosine = std::cos(20.0 * M_PI / 180.0);
-  const std::vector<std::size_t> sizes = segmentation.pointsPerSegment();
-  for (std::size_t i = 0; i < sizes.size() && i < segmentation.segments.size(); ++i) {
+  for (std::size_t i = 0; i < segmentation.segments.size() && i < segmentation.planes.size(); ++i) {
     const Eigen::Vector3d& normal = segmentation.planes[i].normal;
-    if (sizes[i] < min_points || !(normal.norm() > 0.0)) continue;
+    if (segmentation.segments[i].indices.size() < min_points || !(normal.norm() > 0.0)) continue;
     const Eigen::Vector3d n = extent.frame.applyToDirection(normal.normalized());
     for (int side = 0; side < kBoxSides; ++side) {
       const int axis = side % 3;
