@@ -183,6 +183,32 @@ void moveToFileCoordinates(SurfaceMesh& mesh, const Eigen::Vector3d& offset) {
   for (Eigen::Vector3d& v : mesh.vertices) v += offset;
 }
 
+double reachBeyondBox(const SurfaceMesh& mesh, const Eigen::AlignedBox3d& box, const Eigen::Matrix3d& axes) {
+  if (box.isEmpty()) return 0.0;
+  const double diagonal = box.diagonal().norm();
+  if (!(diagonal > 0.0)) return 0.0;
+  double farthest = 0.0;
+  for (const Eigen::Vector3d& v : mesh.vertices)
+    farthest = std::max(farthest, box.exteriorDistance(Eigen::Vector3d(axes.transpose() * v)));
+  return farthest / diagonal;
+}
+
+std::string farReachNote(double reach, double diagonal) {
+  if (!(reach > kFarReach)) return "";
+  const auto shortLength = [](double length) {
+    char number[32];
+    std::snprintf(number, sizeof(number), "%.3g", length);
+    return std::string(number);
+  };
+  char text[512];
+  std::snprintf(text, sizeof(text),
+                "the mesh reaches %s (%.0f %% of the scan's diagonal) beyond the scan's bounding box: that much "
+                "of it is the completion's guess of the unseen side. If the object cannot reach that far, say how "
+                "it was scanned (--seen-from, --seen-from-point) or where it ends (--known-extent); doc/usage.md",
+                shortLength(reach * diagonal).c_str(), 100.0 * reach);
+  return text;
+}
+
 PlanarSegmentation segmentationFromLabels(const io::LabelledCloud& cloud, const std::string& path) {
   // Labels may be any integers: number them 0..K-1 in order of appearance.
   std::map<int, int> segment_of;

@@ -4,6 +4,7 @@
 #include <paco/common/error.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <boost/program_options.hpp>
 
 #include <chrono>
@@ -93,6 +94,22 @@ void warnIfPcdRoundsFarCoordinates(const std::string& path, const Eigen::Vector3
 /// Moves a mesh made in the working frame of a cloud read with `offset` back to the file's
 /// coordinates (SurfaceMesh stores doubles, so nothing is lost).
 void moveToFileCoordinates(SurfaceMesh& mesh, const Eigen::Vector3d& offset);
+
+/// How far `mesh` reaches beyond `box` (the scan's bounding box along `axes`, the columns of a
+/// rotation: the box holds axesᵀ p of the scan's points p), as a fraction of the box's diagonal:
+/// the largest distance from a vertex to the box (a face's farthest point is a vertex), 0 when
+/// the mesh stays inside or the box is empty. Along the box fill's axes (fuseWithSeenFaces) the
+/// fill's own closing box is the scan's, so only what the completion added past it counts.
+double reachBeyondBox(const SurfaceMesh& mesh, const Eigen::AlignedBox3d& box,
+                      const Eigen::Matrix3d& axes = Eigen::Matrix3d::Identity());
+
+/// A note for a mesh that reaches more than kFarReach of the scan's diagonal beyond the scan's box
+/// when the user said nothing of the scan (no --seen-from, --seen-from-point, --known-extent or
+/// --extent-head): the network's guesses of the hidden side may reach where the object cannot be
+/// (an airborne scan of a narrow building grew walls 8 m beside it), and only the user can bound
+/// them. `reach` as reachBeyondBox gives it, `diagonal` in the input's units; "" below the bound.
+std::string farReachNote(double reach, double diagonal);
+inline constexpr double kFarReach = 0.2;
 
 /// A number as --help shows a default: "0.7", not "0.69999999999999996".
 std::string shortNumber(double value);

@@ -290,7 +290,8 @@ inline void guessHiddenExtent(const CompletionModel::ConstPtr& model, const Hidd
 
 /// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`; the box
 /// fill reaches the known extent, and the scanner's view bounds the completion, when given.
-inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
+/// Returns the axes of the box the fill closes (ObservedFusionReport::box_axes).
+inline Eigen::Matrix3d fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
                               const PlanarSegmentation& segmentation, const FusionFlags& flags,
                               const ScanKnowledge& knowledge, StageTimer& timer) {
   if (!knowledge.known_extent.empty()) {
@@ -359,6 +360,7 @@ inline void fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pc
                   "as points in a cloud file instead (e.g. a footprint's corners, or one point on the ground)\n",
                   degrees);
   }
+  return report.box_axes;
 }
 
 }  // namespace paco::app

@@ -198,6 +198,7 @@ int run(int argc, char** argv) {
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
   std::vector<paco::PlanarPrimitive> primitives;
+  Eigen::Matrix3d box_axes = Eigen::Matrix3d::Identity();  // of the box that closes the hidden side
   if (o.no_completion) {
     primitives = paco::makePrimitives(*cloud, segmentation);
   } else {
@@ -206,7 +207,8 @@ int run(int argc, char** argv) {
     if (extent_head) paco::app::guessHiddenExtent(model, *extent_head, cloud, segmentation, o.completion.turns,
                                                    scan_knowledge, timer);
     if (!o.completion.no_fusion)
-      paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.completion.fusion, scan_knowledge, timer);
+      box_axes = paco::app::fuseWithSeenFaces(primitives, *cloud, segmentation, o.completion.fusion, scan_knowledge,
+                                              timer);
   }
   if (paco::interruptRequested()) throw paco::InterruptedError("interrupted");
 
@@ -236,6 +238,15 @@ int run(int argc, char** argv) {
     std::printf("  note: the MIP solver stopped at --time-limit %s s with its best solution so far, not proven "
                 "optimal; a longer limit may give a better mesh\n",
                 paco::app::shortNumber(o.time_limit).c_str());
+  if (!o.no_completion && knowledge.empty()) {
+    // Along the fill's axes the fill's box lies within the scan's: only the network's guesses reach past it.
+    Eigen::AlignedBox3d scan_box;
+    for (const auto& p : cloud->points)
+      scan_box.extend(Eigen::Vector3d(box_axes.transpose() * p.getVector3fMap().cast<double>()));
+    const std::string far =
+        paco::app::farReachNote(paco::app::reachBeyondBox(mesh, scan_box, box_axes), scan_box.diagonal().norm());
+    if (!far.empty()) std::printf("  note: %s\n", far.c_str());
+  }
   if (result.num_merged || result.num_dropped) {
     // Say why primitives were not used, so that a surprising mesh can be traced to its cause.
     std::printf("  %zu of %zu primitives used: %zu merged as near-duplicates, %zu with too few points dropped, "

@@ -195,6 +195,8 @@ TEST(PacoReconstruct, FusionKeepsTheSeenFacesWhenTheNetworkKeepsNothing) {
   EXPECT_NE(log.find("fuse with the seen faces: 0 primitives took a seen plane"), std::string::npos) << log;
   // By default the box of the seen points fills what nothing covers; --fill-box 0 turns it off.
   EXPECT_NE(log.find("points filled on the seen box"), std::string::npos) << log;
+  // The seen faces and the fill stay within the scan's box: no note that the mesh reaches past it.
+  EXPECT_EQ(log.find("beyond the scan's bounding box"), std::string::npos) << log;
   const paco::SurfaceMesh mesh = paco::io::loadMesh(dir.file("fused.obj"));
   EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
   ASSERT_EQ(paco::test::runCommand(base + quoted(dir.file("unfilled.obj")) + " --fill-box 0", &log), 0) << log;
@@ -509,6 +511,9 @@ TEST(PacoReconstruct, AnExtentHeadClosesTheHiddenSideWhereItGuesses) {
   EXPECT_NEAR(lo.x(), 0.0, 0.05) << log;
   EXPECT_NEAR(hi.y(), 1.0, 0.05) << log;
   EXPECT_NEAR(paco::signedVolume(mesh), 2.0, 0.1) << log;
+  // The mesh reaches 1 past the scan's box (58 % of its diagonal), as the user asked by giving the
+  // head: no note asking to bound the completion.
+  EXPECT_EQ(log.find("beyond the scan's bounding box"), std::string::npos) << log;
 
   EXPECT_NE(paco::test::runCommand(base + quoted(dir.file("both.obj")) + " --known-extent 0,0,0,2,1,1", &log), 0);
   EXPECT_NE(log.find("choose one"), std::string::npos) << log;

@@ -14,6 +14,7 @@
 #include "tiny_model_config.h"
 #endif
 
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/surface_mesh.h>
 #include <paco/io/cloud_io.h>
@@ -22,6 +23,7 @@
 
 #include "app_support.h"
 
+#include <cmath>
 #include <filesystem>
 #include <iterator>
 #include <string>
@@ -298,6 +300,38 @@ TEST(PacoTools, OptionErrorsSpeakOfTheToolsOptions) {
   EXPECT_NE(log.find("'" + dir.file("none.vg") + "' holds no primitives"), std::string::npos) << log;
   EXPECT_EQ(log.find("setInputPrimitives"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(dir.file("a.obj")));
+}
+
+// How far a mesh reaches beyond the scan's box, as a share of its diagonal, and the note that
+// asks the user to bound the completion past kFarReach.
+TEST(PacoTools, AMeshReachingFarBeyondTheScanIsNoted) {
+  const Eigen::AlignedBox3d scan_box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2, 1, 2));  // diagonal 3
+  EXPECT_DOUBLE_EQ(paco::app::reachBeyondBox(paco::test::makeBox({0, 0, 0}, {2, 1, 2}), scan_box), 0.0);
+  // The box grown by 1.2 along +y: its farthest vertices lie 1.2 from the scan's box, 40 % of 3.
+  const paco::SurfaceMesh grown = paco::test::makeBox({0, 0, 0}, {2, 2.2, 2});
+  EXPECT_NEAR(paco::app::reachBeyondBox(grown, scan_box), 0.4, 1e-12);
+  // A corner 0.3 past two sides at once is 0.3 * sqrt(2) away.
+  EXPECT_NEAR(paco::app::reachBeyondBox(paco::test::makeBox({-0.3, -0.3, 0}, {2, 1, 2}), scan_box),
+              0.3 * std::sqrt(2.0) / 3.0, 1e-12);
+  EXPECT_DOUBLE_EQ(paco::app::reachBeyondBox(grown, Eigen::AlignedBox3d()), 0.0);
+  // Along turned axes (the box fill's, 45 degrees about z): the scan's box there is [0,2] x [0,1] x
+  // [0,2]; the same box turned into place reaches nothing past it, though its corners stand out of
+  // the turned box's axis-aligned bounds. Grown by 1.2 along the second axis, it reaches 1.2.
+  const Eigen::Matrix3d axes = Eigen::AngleAxisd(paco::kPi / 4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  auto turned = [&](paco::SurfaceMesh mesh) {
+    for (Eigen::Vector3d& v : mesh.vertices) v = axes * v;
+    return mesh;
+  };
+  EXPECT_NEAR(paco::app::reachBeyondBox(turned(paco::test::makeBox({0, 0, 0}, {2, 1, 2})), scan_box, axes), 0.0, 1e-12);
+  EXPECT_GT(paco::app::reachBeyondBox(turned(paco::test::makeBox({0, 0, 0}, {2, 1, 2})), scan_box), 0.1);
+  EXPECT_NEAR(paco::app::reachBeyondBox(turned(grown), scan_box, axes), 0.4, 1e-12);
+
+  const std::string note = paco::app::farReachNote(0.4, 3.0);
+  EXPECT_NE(note.find("reaches 1.2 (40 % of the scan's diagonal)"), std::string::npos) << note;
+  EXPECT_NE(note.find("--seen-from"), std::string::npos) << note;
+  EXPECT_NE(note.find("--known-extent"), std::string::npos) << note;
+  EXPECT_EQ(paco::app::farReachNote(paco::app::kFarReach, 3.0), "");
+  EXPECT_EQ(paco::app::farReachNote(0.0, 3.0), "");
 }
 
 #ifdef PACO_TEST_WITH_COMPLETION
