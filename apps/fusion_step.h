@@ -291,9 +291,10 @@ inline void guessHiddenExtent(const CompletionModel::ConstPtr& model, const Hidd
 /// Replaces `primitives` (the completion) by their fusion with the seen faces of `cloud`; the box
 /// fill reaches the known extent, and the scanner's view bounds the completion, when given.
 /// Returns the axes of the box the fill closes (ObservedFusionReport::box_axes).
-inline Eigen::Matrix3d fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives, const pcl::PointCloud<pcl::PointNormal>& cloud,
-                              const PlanarSegmentation& segmentation, const FusionFlags& flags,
-                              const ScanKnowledge& knowledge, StageTimer& timer) {
+inline Eigen::Matrix3d fuseWithSeenFaces(std::vector<PlanarPrimitive>& primitives,
+                                         const pcl::PointCloud<pcl::PointNormal>& cloud,
+                                         const PlanarSegmentation& segmentation, const FusionFlags& flags,
+                                         const ScanKnowledge& knowledge, StageTimer& timer) {
   if (!knowledge.known_extent.empty()) {
     // The object reaches the known extent and holds the scan: far apart, the two are most likely
     // in different units or frames (the fill would then close a box around both).

@@ -1,3 +1,4 @@
+#include <paco/common/angles.h>
 #include <paco/common/error.h>
 #include <paco/common/hash.h>
 #include <paco/common/orientation.h>
@@ -292,7 +293,7 @@ HiddenExtent estimateHiddenExtent(const CompletionModel::ConstPtr& model, const 
 void closeSidesOnSeenFaces(HiddenExtent& extent, const pcl::PointCloud<pcl::PointNormal>& cloud,
                            const PlanarSegmentation& segmentation, double reach, std::size_t min_points) {
   if (extent.seen_box.isEmpty()) return;
-  const double min_cosine = std::cos(20.0 * M_PI / 180.0);
+  const double min_cosine = std::cos(degreesToRadians(20.0));
   for (std::size_t i = 0; i < segmentation.segments.size() && i < segmentation.planes.size(); ++i) {
     const Eigen::Vector3d& normal = segmentation.planes[i].normal;
     if (segmentation.segments[i].indices.size() < min_points || !(normal.norm() > 0.0)) continue;
