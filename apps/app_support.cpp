@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -52,6 +53,23 @@ int runTool(const std::string& tool_name, const std::function<int()>& body) {
     std::cerr << tool_name << ": error: " << e.what() << std::endl;
     return 1;
   }
+}
+
+void exitSkippingTeardown(int code) {
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  std::exit(code);
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+  std::exit(code);
+#else
+  std::_Exit(code);
+#endif
+#else
+  std::_Exit(code);
+#endif
 }
 
 namespace {
@@ -391,25 +409,36 @@ void StageTimer::start(const std::string& stage) {
 
 void StageTimer::stop() {
   if (current_.empty()) return;
-  stages_.emplace_back(current_, std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count());
+  addStage(current_, std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count());
   current_.clear();
 }
 
+void StageTimer::addStage(const std::string& stage, double seconds) {
+  const auto it = std::find_if(stages_.begin(), stages_.end(), [&](const auto& s) { return s.first == stage; });
+  if (it == stages_.end()) stages_.emplace_back(stage, seconds);
+  else it->second += seconds;
+}
+
+double StageTimer::total() const {
+  double sum = 0;
+  for (const auto& stage : stages_) sum += stage.second;
+  return sum;
+}
+
+void StageTimer::add(const StageTimer& other) {
+  for (const auto& [name, s] : other.stages_) addStage(name, s);
+}
+
 double StageTimer::seconds(const std::string& stage) const {
-  double total = 0;
   for (const auto& [name, s] : stages_)
-    if (name == stage) total += s;
-  return total;
+    if (name == stage) return s;
+  return 0.0;
 }
 
 void StageTimer::print() const {
-  double total = 0;
   std::printf("timing:\n");
-  for (const auto& [name, s] : stages_) {
-    std::printf("  %-14s %8.3f s\n", name.c_str(), s);
-    total += s;
-  }
-  std::printf("  %-14s %8.3f s\n", "total", total);
+  for (const auto& [name, s] : stages_) std::printf("  %-14s %8.3f s\n", name.c_str(), s);
+  std::printf("  %-14s %8.3f s\n", "total", total());
 }
 
 }  // namespace paco::app

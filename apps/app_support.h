@@ -29,6 +29,14 @@ namespace paco::app {
 /// for paco::InterruptedError). Also removes the pending outputs on failure.
 int runTool(const std::string& tool_name, const std::function<int()>& body);
 
+/// Ends the process with `code` after a tool's body has returned (its outputs committed or
+/// removed), flushing stdout and stderr but skipping static destructors: at exit LibTorch
+/// unregisters its thousands of operators one by one, about 0.3 s of a 1.7 s paco_reconstruct run
+/// on the sample (doc/results.md, "Latency"). Sanitizer builds exit normally, so that
+/// LeakSanitizer's check at exit still runs. Only for a tool's main(), never inside runTool, which
+/// tests call in-process.
+[[noreturn]] void exitSkippingTeardown(int code);
+
 /// Thrown for a bad command line; runTool prints it with a hint to use --help, exit code 2.
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -181,15 +189,22 @@ class PendingOutput {
   bool committed_ = false;
 };
 
-/// Measures and prints per-stage wall times: "  segment      0.031 s".
+/// Measures and prints per-stage wall times: "  segment      0.031 s". A stage timed twice prints
+/// once with both times added.
 class StageTimer {
  public:
   void start(const std::string& stage);
   void stop();
   double seconds(const std::string& stage) const;
+  /// The sum of every stage's time.
+  double total() const;
+  /// Adds `other`'s stages to this timer's, by name (paco_reconstruct's total over many scans).
+  void add(const StageTimer& other);
   void print() const;
 
  private:
+  void addStage(const std::string& stage, double seconds);
+
   std::vector<std::pair<std::string, double>> stages_;
   std::string current_;
   std::chrono::steady_clock::time_point started_;

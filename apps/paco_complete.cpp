@@ -204,5 +204,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return paco::app::runTool(kTool, [&] { return run(argc, argv); });
+  paco::app::exitSkippingTeardown(paco::app::runTool(kTool, [&] { return run(argc, argv); }));
 }

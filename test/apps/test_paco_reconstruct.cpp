@@ -946,6 +946,118 @@ TEST(PacoReconstruct, OutputPathsAreCheckedBeforeAnyWork) {
   EXPECT_EQ(filesIn(dir.path()), 1u);  // the folder made above, nothing else
 }
 
+// Many scans in one run, the model loaded once: each good scan gets its three outputs, named after
+// it in --output-dir; a truncated one is reported and skipped, and the run exits 1 naming it.
+#ifdef PACO_TEST_WITH_COMPLETION
+TEST(PacoReconstruct, AFolderOfScansIsReconstructedWithOneModelLoad) {
+  TempDir dir;
+  paco::PacoNetwork network(paco::test::tinyModelConfig());
+  paco::saveCheckpoint(dir.file("tiny.pt"), network);
+  const std::string moved = writeMovedSample(dir);
+  const std::string bytes = paco::test::readBytes(samplePath());
+  paco::test::writeBytes(dir.file("cut.pcd"), bytes.substr(0, bytes.size() / 2));
+  const std::string out = dir.file("meshes");  // made by the run
+  std::string log;
+  const int rc = paco::test::runCommand(tool() + " " + quoted(samplePath()) + " " + quoted(dir.file("cut.pcd")) + " " +
+                                            quoted(moved) + " --output-dir " + quoted(out) + " --format off --model " +
+                                            quoted(dir.file("tiny.pt")) + " --threshold 1 --assembler cell-complex",
+                                        &log);
+  EXPECT_EQ(rc, 1) << log;
+  EXPECT_NE(log.find("[1/3] '" + samplePath() + "'"), std::string::npos) << log;
+  // The third scan's line says how long a scan takes and how long the rest will.
+  const std::size_t third = log.find("[3/3, ");
+  ASSERT_NE(third, std::string::npos) << log;
+  const std::string third_line = log.substr(third, log.find('\n', third) - third);
+  EXPECT_TRUE(std::regex_match(third_line, std::regex(R"(\[3/3, [0-9.]+ s per scan, about [0-9.]+ s left\] '.*')")))
+      << third_line;
+  EXPECT_NE(third_line.find("'" + moved + "'"), std::string::npos) << third_line;
+  EXPECT_NE(log.find("cut.pcd': truncated"), std::string::npos) << log;
+  EXPECT_NE(log.find("reconstructed 2 of 3 scans into '" + out + "'"), std::string::npos) << log;
+  EXPECT_NE(log.find("1 of 3 scans failed (their messages are above): '" + dir.file("cut.pcd") + "'"),
+            std::string::npos)
+      << log;
+  const std::size_t load = log.find("load model");  // in the timing totals, and only there
+  EXPECT_NE(load, std::string::npos) << log;
+  EXPECT_EQ(log.find("load model", load + 1), std::string::npos) << log;
+
+  EXPECT_EQ(filesIn(out), 6u);  // two scans' mesh, .vg and .pcd; nothing of the truncated one, nothing partial
+  for (const char* stem : {"sample_partial", "moved"}) {
+    SCOPED_TRACE(stem);
+    const paco::SurfaceMesh mesh = paco::io::loadMesh(out + "/" + stem + ".off");
+    EXPECT_TRUE(paco::analyseTopology(mesh).isClosedManifold());
+    EXPECT_GE(paco::io::loadVertexGroups(out + "/" + stem + ".vg").segmentation.size(), 4u);
+    EXPECT_TRUE(fs::exists(out + "/" + stem + "_primitives.pcd"));
+  }
+  // Each mesh is in its own input's frame: the moved sample's is 250 times the sample's.
+  Eigen::Vector3d min_a, max_a, min_b, max_b;
+  paco::boundingBox(paco::io::loadMesh(out + "/sample_partial.off"), min_a, max_a);
+  paco::boundingBox(paco::io::loadMesh(out + "/moved.off"), min_b, max_b);
+  EXPECT_NEAR((max_b - min_b).norm() / (max_a - min_a).norm(), 250.0, 2.5);
+
+  // A run where every scan fails leaves no folder behind it made.
+  const std::string none = dir.file("none");
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(dir.file("cut.pcd")) + " --output-dir " + quoted(none) +
+                                       " --no-completion",
+                                   &log),
+            1)
+      << log;
+  EXPECT_NE(log.find("reconstructed 0 of 1 scans"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(none)) << log;
+}
+#endif
+
+TEST(PacoReconstruct, ManyInputsNeedAnOutputFolder) {
+  TempDir dir;
+  const std::string two = tool() + " " + quoted(samplePath()) + " " + quoted(dir.file("b.pcd")) + " --no-completion";
+  fs::copy_file(samplePath(), dir.file("b.pcd"));
+  std::string log;
+  EXPECT_EQ(paco::test::runCommand(two + " -o " + quoted(dir.file("m.obj")), &log), 2) << log;
+  EXPECT_NE(log.find("-o names one mesh, but 2 INPUTs were given: use --output-dir DIR"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(two, &log), 2) << log;
+  EXPECT_NE(log.find("expected --output-dir DIR for 2 INPUTs"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(two + " -o " + quoted(dir.file("m.obj")) + " --output-dir " + quoted(dir.file("o")),
+                                   &log),
+            2)
+      << log;
+  EXPECT_NE(log.find("give -o MESH or --output-dir DIR, not both"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(two + " --output-dir " + quoted(dir.file("o")) + " --vg " + quoted(dir.file("p.vg")),
+                                   &log),
+            2)
+      << log;
+  EXPECT_NE(log.find("--vg and --pcd name one scan's outputs"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(two + " --output-dir " + quoted(dir.file("o")) + " --format xyz", &log), 2) << log;
+  EXPECT_NE(log.find("--format must be obj, off, ply or stl, got 'xyz'"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " -o " + quoted(dir.file("m.obj")) +
+                                       " --format ply --no-completion",
+                                   &log),
+            2)
+      << log;
+  EXPECT_NE(log.find("--format goes with --output-dir"), std::string::npos) << log;
+  // Two inputs named alike would overwrite each other's mesh; one input twice is a slip.
+  fs::create_directories(dir.file("other"));
+  fs::copy_file(samplePath(), dir.file("other/b.pcd"));
+  EXPECT_EQ(paco::test::runCommand(two + " " + quoted(dir.file("other/b.pcd")) + " --output-dir " + quoted(dir.file("o")),
+                                   &log),
+            2)
+      << log;
+  EXPECT_NE(log.find("would both be written as 'b.obj' in --output-dir"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(two + " " + quoted(dir.file("b.pcd")) + " --output-dir " + quoted(dir.file("o")), &log),
+            2)
+      << log;
+  EXPECT_NE(log.find("INPUT '" + dir.file("b.pcd") + "' is given twice"), std::string::npos) << log;
+  EXPECT_EQ(paco::test::runCommand(tool() + " " + quoted(samplePath()) + " " + quoted(dir.file("b.pcd")) +
+                                       " --output-dir " + quoted(dir.file("o")) + " --known-extent 0,0,0",
+                                   &log),
+            2)
+      << log;
+  EXPECT_NE(log.find("--known-extent says where one object reaches"), std::string::npos) << log;
+  paco::test::writeBytes(dir.file("file"), "x");
+  EXPECT_EQ(paco::test::runCommand(two + " --output-dir " + quoted(dir.file("file")), &log), 2) << log;
+  EXPECT_NE(log.find("--output-dir '" + dir.file("file") + "' is a file, not a folder"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(dir.file("o")));  // no usage error made the folder
+  EXPECT_EQ(filesIn(dir.path()), 3u);       // b.pcd, other/, file
+}
+
 #ifdef PACO_CHAIN_STAGES_EXAMPLE
 // The documentation's example chains the four classes by hand; it must keep working.
 TEST(ChainStagesExample, RunsOnTheSampleScan) {
