@@ -1,5 +1,6 @@
 #include "app_support.h"
 
+#include <paco/common/allocator.h>
 #include <paco/common/error.h>
 #include <paco/common/primitive.h>
 #include <paco/common/surface_mesh.h>
@@ -28,6 +29,7 @@
 namespace paco::app {
 
 int runTool(const std::string& tool_name, const std::function<int()>& body) {
+  paco::keepFreedMemoryForReuse();  // LibTorch's tensors then cost no page faults each time
   try {
     return body();
   } catch (const UsageError& e) {

@@ -24,7 +24,8 @@ struct LabelledCloud;
 
 namespace paco::app {
 
-/// Runs a tool's body; turns paco::Error and std::exception into "<tool>: error: <message>" on
+/// Runs a tool's body, with the allocator set to keep freed memory (paco::keepFreedMemoryForReuse);
+/// turns paco::Error and std::exception into "<tool>: error: <message>" on
 /// stderr and exit code 1 (2 for usage errors; 130 and "<tool>: interrupted; nothing written"
 /// for paco::InterruptedError). Also removes the pending outputs on failure.
 int runTool(const std::string& tool_name, const std::function<int()>& body);

@@ -3,6 +3,7 @@
 //   bench_network --preset cpu --threads 2            # one preset
 //   bench_network --threads 2                         # both presets, Markdown table
 //   bench_network --preset cpu --set width=256 --set decoder_depth=6   # explore a variant
+#include <paco/common/allocator.h>
 #include <paco/common/blas.h>
 #include <paco/completion/network.h>
 #include <paco/encoding/model_config.h>
@@ -116,7 +117,8 @@ int main(int argc, char** argv) {
       "batch", po::value(&batch)->default_value(16), "training batch size")(
       "train-steps", po::value(&train_steps)->default_value(5), "timed training steps (0: skip)")(
       "inference-runs", po::value(&inference_runs)->default_value(20), "timed batch-1 forwards")(
-      "points", po::value(&points)->default_value(2048), "points per input cloud");
+      "points", po::value(&points)->default_value(2048), "points per input cloud")(
+      "default-malloc", "leave the C library's allocator as it is (the tools keep freed memory for reuse)");
   po::variables_map vm;
   try {
     po::store(po::parse_command_line(argc, argv, options), vm);
@@ -130,9 +132,11 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (presets.empty()) presets = {"cpu", "paper"};
+  const bool kept = !vm.count("default-malloc") && paco::keepFreedMemoryForReuse();
   paco::warnIfSlowBlas();
   at::set_num_threads(threads);
-  std::printf("threads %d, batch %d, %d points per cloud\n\n", threads, batch, points);
+  std::printf("threads %d, batch %d, %d points per cloud, %s\n\n", threads, batch, points,
+              kept ? "freed memory kept for reuse" : "the C library's default allocator");
   std::printf("| preset | parameters | train step wall s (batch %d) | train samples/s | train step CPU s "
               "| batch-1 inference wall ms (median) | batch-1 inference CPU ms |\n",
               batch);
