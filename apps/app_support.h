@@ -33,7 +33,7 @@ int runTool(const std::string& tool_name, const std::function<int()>& body);
 /// Ends the process with `code` after a tool's body has returned (its outputs committed or
 /// removed), flushing stdout and stderr but skipping static destructors: at exit LibTorch
 /// unregisters its thousands of operators one by one, about 0.3 s of a 1.7 s paco_reconstruct run
-/// on the sample (doc/results.md, "Latency"). Sanitizer builds exit normally, so that
+/// on the sample (doc/benchmarks.md, "Process start and exit"). Sanitizer builds exit normally, so that
 /// LeakSanitizer's check at exit still runs. Only for a tool's main(), never inside runTool, which
 /// tests call in-process.
 [[noreturn]] void exitSkippingTeardown(int code);

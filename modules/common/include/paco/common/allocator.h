@@ -9,8 +9,8 @@ namespace paco {
 /// such blocks afresh and unmaps them, or trims the heap, when they are freed, so every layer
 /// pays for its memory again in page faults (and, with two threads, in flushes of the other
 /// core's address cache). With this setting, on the 2 cores of the fifty-fifth session's machine,
-/// the completion of a scan (four turns of the network) takes about 30 % less time, and a training
-/// step at batch 16 about 40 % less, with the same peak memory (doc/benchmarks.md). Freed memory
+/// the completion of a scan (four turns of the network) takes 20-30 % less time, and a training
+/// step at batch 16 20-40 % less, with the same peak memory (doc/benchmarks.md). Freed memory
 /// stays with the process until it exits. Every paco_* tool calls it at start; call it in your
 /// own program for the same speed. Returns false where the C library has no such setting (not
 /// glibc), where nothing changes.
