@@ -32,6 +32,15 @@ int runTool(const std::string& tool_name, const std::function<int()>& body) {
   paco::keepFreedMemoryForReuse();  // LibTorch's tensors then cost no page faults each time
   try {
     return body();
+  } catch (...) {
+    return reportCurrentException(tool_name);
+  }
+}
+
+int reportCurrentException(const std::string& tool_name, const std::string& subject) {
+  const std::string about = subject.empty() ? std::string() : "'" + subject + "': ";
+  try {
+    throw;
   } catch (const UsageError& e) {
     std::cerr << tool_name << ": " << e.what() << "\nTry '" << tool_name << " --help'." << std::endl;
     return 2;
@@ -41,18 +50,19 @@ int runTool(const std::string& tool_name, const std::function<int()>& body) {
     std::cerr << tool_name << ": " << e.what() << "; nothing written" << std::endl;
     return 130;
   } catch (const paco::Error& e) {
-    std::cerr << tool_name << ": error: " << e.what() << std::endl;
+    std::cerr << tool_name << ": error: " << e.what() << std::endl;  // paco's messages name their file
     return 1;
   } catch (const c10::Error& e) {
     // LibTorch's own message (e.g. "not enough memory: you tried to allocate ..."), without the
     // stack trace of LibTorch's frames that what() appends.
-    std::cerr << tool_name << ": error: " << e.what_without_backtrace() << std::endl;
+    std::cerr << tool_name << ": error: " << about << e.what_without_backtrace() << std::endl;
     return 1;
   } catch (const std::bad_alloc&) {
-    std::cerr << tool_name << ": error: out of memory; try a smaller input or smaller settings" << std::endl;
+    std::cerr << tool_name << ": error: " << about << "out of memory; try a smaller input or smaller settings"
+              << std::endl;
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << tool_name << ": error: " << e.what() << std::endl;
+    std::cerr << tool_name << ": error: " << about << e.what() << std::endl;
     return 1;
   }
 }
@@ -61,14 +71,8 @@ void exitSkippingTeardown(int code) {
   std::cout.flush();
   std::cerr.flush();
   std::fflush(nullptr);
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#ifdef PACO_SANITIZER_ALLOCATOR
   std::exit(code);
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-  std::exit(code);
-#else
-  std::_Exit(code);
-#endif
 #else
   std::_Exit(code);
 #endif

@@ -30,6 +30,11 @@ namespace paco::app {
 /// for paco::InterruptedError). Also removes the pending outputs on failure.
 int runTool(const std::string& tool_name, const std::function<int()>& body);
 
+/// Call only inside a catch block: prints the exception in flight as runTool does and returns
+/// its exit code. A non-empty `subject` (paco_reconstruct's scan in a run of many) is named
+/// before messages that do not come from paco, whose own messages name their file.
+int reportCurrentException(const std::string& tool_name, const std::string& subject = std::string());
+
 /// Ends the process with `code` after a tool's body has returned (its outputs committed or
 /// removed), flushing stdout and stderr but skipping static destructors: at exit LibTorch
 /// unregisters its thousands of operators one by one, about 0.3 s of a 1.7 s paco_reconstruct run

@@ -339,15 +339,17 @@ int run(int argc, char** argv) {
                                               {"--known-extent", o.completion.knowledge.known_extent},
                                               {"--extent-head", o.completion.knowledge.extent_head}},
       outputs;
+  // Errors name the option that chose the path.
+  const std::string mesh_option = batch ? "--output-dir" : "-o", vg_option = batch ? "--output-dir" : "--vg",
+                    pcd_option = batch ? "--output-dir" : "--pcd";
   for (const ScanJob& job : jobs) {
-    const std::string mesh_option = batch ? "--output-dir" : "-o";
     paco::app::checkOutputPath(job.mesh, mesh_option, {".obj", ".off", ".ply", ".stl"});
-    paco::app::checkOutputPath(job.vg, batch ? "--output-dir" : "--vg", {".vg", ".bvg"});
-    paco::app::checkOutputPath(job.pcd, batch ? "--output-dir" : "--pcd", {".pcd"});
+    paco::app::checkOutputPath(job.vg, vg_option, {".vg", ".bvg"});
+    paco::app::checkOutputPath(job.pcd, pcd_option, {".pcd"});
     inputs.push_back({"INPUT", job.input});
     outputs.push_back({mesh_option, job.mesh});
-    outputs.push_back({batch ? "--output-dir" : "--vg", job.vg});
-    outputs.push_back({batch ? "--output-dir" : "--pcd", job.pcd});
+    outputs.push_back({vg_option, job.vg});
+    outputs.push_back({pcd_option, job.pcd});
   }
   paco::app::checkOutputsAreNotInputs(inputs, outputs);
 
@@ -403,18 +405,10 @@ int run(int argc, char** argv) {
       interrupted_at = jobs[i].input;
       run_timer.add(scan_timer);
       break;
-    } catch (const paco::Error& e) {
+    } catch (...) {
       failed.push_back(jobs[i].input);
       std::fflush(stdout);
-      std::fprintf(stderr, "%s: error: %s\n", kTool, e.what());
-    } catch (const c10::Error& e) {
-      failed.push_back(jobs[i].input);
-      std::fflush(stdout);
-      std::fprintf(stderr, "%s: error: '%s': %s\n", kTool, jobs[i].input.c_str(), e.what_without_backtrace());
-    } catch (const std::exception& e) {
-      failed.push_back(jobs[i].input);
-      std::fflush(stdout);
-      std::fprintf(stderr, "%s: error: '%s': %s\n", kTool, jobs[i].input.c_str(), e.what());
+      paco::app::reportCurrentException(kTool, jobs[i].input);
     }
     run_timer.add(scan_timer);
   }

@@ -9,20 +9,12 @@
 #include <malloc.h>
 #endif
 
-// A sanitizer's allocator replaces glibc's, and with it what mallinfo2 reports.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define PACO_TEST_GLIBC_MALLOC 0
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define PACO_TEST_GLIBC_MALLOC 0
-#endif
-#endif
-#if !defined(PACO_TEST_GLIBC_MALLOC)
-#if defined(__GLIBC__)
+// A sanitizer's allocator (the build's PACO_SANITIZE) replaces glibc's, and with it what mallinfo2
+// reports.
+#if defined(__GLIBC__) && !defined(PACO_SANITIZER_ALLOCATOR)
 #define PACO_TEST_GLIBC_MALLOC 1
 #else
 #define PACO_TEST_GLIBC_MALLOC 0
-#endif
 #endif
 
 namespace {
